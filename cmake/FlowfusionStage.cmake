@@ -1,0 +1,31 @@
+# flowfusion_stage(NAME DEPS ... [PRIVATE_DEPS ...] [PRIVATE_INCLUDES ...] [PRIVATE_DEFINES ...]):
+# a static library from every .cpp in src/flowfusion/NAME.
+function(flowfusion_stage name)
+  cmake_parse_arguments(ARG "" "" "DEPS;PRIVATE_DEPS;PRIVATE_INCLUDES;PRIVATE_DEFINES" ${ARGN})
+  file(GLOB _sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/*.cpp)
+  if(_sources)
+    add_library(flowfusion_${name} STATIC ${_sources})
+    target_include_directories(flowfusion_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+    target_link_libraries(flowfusion_${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+    target_include_directories(flowfusion_${name} SYSTEM PRIVATE ${ARG_PRIVATE_INCLUDES})
+    target_compile_definitions(flowfusion_${name} PRIVATE ${ARG_PRIVATE_DEFINES})
+  else()
+    # A stage whose folder holds only headers so far.
+    add_library(flowfusion_${name} INTERFACE)
+    target_include_directories(flowfusion_${name} INTERFACE ${PROJECT_SOURCE_DIR}/src)
+    target_link_libraries(flowfusion_${name} INTERFACE ${ARG_DEPS})
+  endif()
+endfunction()
+
+# flowfusion_test(STAGE DEPS ...): one GoogleTest executable from every .cpp in tests/STAGE.
+function(flowfusion_test stage)
+  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  file(GLOB _sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${stage}/*.cpp)
+  if(NOT _sources)
+    return()
+  endif()
+  add_executable(test_${stage} ${_sources})
+  target_link_libraries(test_${stage} PRIVATE flowfusion_testing ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  gtest_discover_tests(test_${stage} DISCOVERY_TIMEOUT 60
+    PROPERTIES ENVIRONMENT "FLOWFUSION_SHARED_DATA=${FLOWFUSION_SHARED_DATA}")
+endfunction()

@@ -1,0 +1,34 @@
+#pragma once
+// Configuration plumbing shared by every stage. Each stage has one struct with documented
+// defaults and units, made (de)serialisable with NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT
+// beside it. A resolved configuration is the defaults, then a JSON file, then "key.path=value"
+// overrides from the command line; unknown keys and wrongly typed values are errors.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace ff {
+
+// Merges `patch` into `base` in place. Every key in the patch must exist in base and keep its
+// JSON type (numbers may change between integer and float). Throws InputError naming `source`
+// and the key path.
+void mergeConfig(nlohmann::json& base, const nlohmann::json& patch, const std::string& source);
+
+// Applies one "a.b.c=value" override; value is parsed as JSON, else taken as a string.
+void applyOverride(nlohmann::json& base, const std::string& assignment);
+
+// Reads a JSON file (InputError naming the file on failure).
+nlohmann::json readJsonFile(const std::string& path);
+void writeJsonFile(const std::string& path, const nlohmann::json& j);
+
+// Defaults -> file (if non-empty) -> overrides, then converted back to T. Conversion errors
+// (e.g. a negative count) are reported as InputError.
+template <typename T>
+T resolveConfig(const T& defaults, const std::string& file, const std::vector<std::string>& overrides) {
+  nlohmann::json j = defaults;
+  if (!file.empty()) mergeConfig(j, readJsonFile(file), file);
+  for (const auto& o : overrides) applyOverride(j, o);
+  return j.get<T>();
+}
+
+}  // namespace ff

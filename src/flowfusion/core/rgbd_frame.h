@@ -1,0 +1,26 @@
+#pragma once
+// One RGB-D observation in the units every stage uses.
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace ff {
+
+struct RgbdFrame {
+  double timestamp = 0;  // seconds (the colour image's timestamp)
+  cv::Mat color;         // CV_8UC3, BGR (OpenCV's order)
+  cv::Mat intensity;     // CV_32FC1, grey level in [0, 1]
+  cv::Mat depth;         // CV_32FC1, metres along the optical axis; 0 = no measurement
+  std::string name;      // where it came from (file name), for messages
+
+  int width() const { return depth.cols; }
+  int height() const { return depth.rows; }
+};
+
+// Builds a frame from a BGR image and a raw 16-bit depth image (depth_scale units per metre,
+// 5000 for TUM). Sizes must match; the caller has checked types.
+RgbdFrame makeRgbdFrame(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth16, double depth_scale,
+                        const std::string& name = {});
+// Intensity in [0, 1] from BGR (ITU-R BT.601 luma, as cv::cvtColor).
+cv::Mat intensityFromBgr(const cv::Mat& bgr8);
+
+}  // namespace ff

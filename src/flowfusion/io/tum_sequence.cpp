@@ -1,0 +1,220 @@
+#include "flowfusion/io/tum_sequence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <regex>
+#include <sstream>
+
+#include "flowfusion/core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace ff {
+
+std::string timestampName(double t) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.6f", t);
+  return buf;
+}
+
+std::vector<std::pair<double, std::string>> readFileList(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open file list");
+  std::vector<std::pair<double, std::string>> out;
+  std::string line;
+  int lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ss(line);
+    double t;
+    std::string file;
+    if (!(ss >> t) || !(ss >> file) || !std::isfinite(t))
+      throw InputError(path + ":" + std::to_string(lineno) + ": expected 'timestamp filename', got '" + line + "'");
+    if (!out.empty() && t <= out.back().first)
+      throw InputError(path + ":" + std::to_string(lineno) + ": timestamp " + timestampName(t) +
+                       (t == out.back().first ? " is a duplicate" : " is earlier than the previous line") +
+                       " (timestamps must be strictly increasing)");
+    out.emplace_back(t, file);
+  }
+  if (out.empty()) throw InputError(path + ": file list is empty");
+  return out;
+}
+
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<double>& a, const std::vector<double>& b,
+                                                 double max_diff) {
+  // All candidate pairs within max_diff, best first; both lists are sorted so a window suffices.
+  std::vector<std::tuple<double, size_t, size_t>> cand;
+  size_t lo = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    while (lo < b.size() && b[lo] < a[i] - max_diff) ++lo;
+    for (size_t j = lo; j < b.size() && b[j] <= a[i] + max_diff; ++j) cand.emplace_back(std::abs(a[i] - b[j]), i, j);
+  }
+  std::sort(cand.begin(), cand.end());
+  std::vector<char> used_a(a.size(), 0), used_b(b.size(), 0);
+  std::vector<std::pair<size_t, size_t>> out;
+  for (const auto& [d, i, j] : cand) {
+    if (used_a[i] || used_b[j]) continue;
+    used_a[i] = used_b[j] = 1;
+    out.emplace_back(i, j);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+CameraIntrinsics readCameraFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open camera file");
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ss(line);
+    std::string word;
+    ss >> word;
+    if (word == "fr1" || word == "fr2" || word == "fr3") return parseCamera(word, path);
+    std::istringstream nums(line);
+    double v[6];
+    for (double& x : v)
+      if (!(nums >> x))
+        throw InputError(path + ": expected 'fx fy cx cy width height' or fr1|fr2|fr3, got '" + line + "'");
+    CameraIntrinsics c{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
+    if (!c.valid()) throw InputError(path + ": focal lengths and image size must be positive");
+    return c;
+  }
+  throw InputError(path + ": camera file holds no intrinsics");
+}
+
+void writeCameraFile(const std::string& path, const CameraIntrinsics& c) {
+  std::ofstream out(path);
+  out << "# fx fy cx cy width height (pixels)\n";
+  out.precision(10);
+  out << c.fx << ' ' << c.fy << ' ' << c.cx << ' ' << c.cy << ' ' << c.width << ' ' << c.height << '\n';
+  if (!out) throw InputError(path + ": cannot write camera file");
+}
+
+TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& options) {
+  if (!fs::is_directory(dir)) throw InputError(dir + ": sequence folder does not exist");
+  TumSequence s;
+  s.dir_ = dir;
+  s.options_ = options;
+  if (!(options.depth_scale > 0)) throw InputError("depth scale must be positive");
+
+  const fs::path root(dir);
+  if (!options.camera.empty()) {
+    s.camera_ = parseCamera(options.camera);
+  } else if (fs::exists(root / "camera.txt")) {
+    s.camera_ = readCameraFile((root / "camera.txt").string());
+  } else {
+    std::string name = fs::weakly_canonical(root).filename().string();
+    std::smatch m;
+    if (std::regex_search(name, m, std::regex("^(rgbd_dataset_freiburg|fr)([123])_")))
+      s.camera_ = *freiburgPreset(m[2].str()[0] - '0');
+    else
+      throw InputError(dir + ": no camera intrinsics: give --camera fr1|fr2|fr3|fx,fy,cx,cy, put a camera.txt "
+                             "('fx fy cx cy width height') in the folder, or name it rgbd_dataset_freiburgN_*");
+  }
+
+  const auto rgb = readFileList((root / "rgb.txt").string());
+  const auto depth = readFileList((root / "depth.txt").string());
+  std::vector<double> ta, tb;
+  for (const auto& e : rgb) ta.push_back(e.first);
+  for (const auto& e : depth) tb.push_back(e.first);
+  const auto pairs = associate(ta, tb, options.max_time_diff);
+  if (pairs.empty())
+    throw InputError(dir + ": no colour frame has a depth frame within " + std::to_string(options.max_time_diff) +
+                     " s (check the timestamps in rgb.txt and depth.txt)");
+  for (const auto& [i, j] : pairs)
+    s.entries_.push_back({rgb[i].first, (root / rgb[i].second).string(), depth[j].first,
+                          (root / depth[j].second).string()});
+  if (fs::exists(root / "groundtruth.txt")) s.groundtruth_ = readTrajectory((root / "groundtruth.txt").string());
+  return s;
+}
+
+std::optional<std::string> TumSequence::masksDir() const {
+  const fs::path p = fs::path(dir_) / "masks";
+  if (fs::is_directory(p)) return p.string();
+  return std::nullopt;
+}
+
+RgbdFrame TumSequence::load(size_t i) const {
+  const FrameEntry& e = entries_.at(i);
+  cv::Mat color = cv::imread(e.rgb_path, cv::IMREAD_UNCHANGED);
+  if (color.empty()) throw InputError(e.rgb_path + ": missing or unreadable colour image");
+  if (color.depth() != CV_8U)
+    throw InputError(e.rgb_path + ": colour image must be 8-bit per channel");
+  if (color.channels() == 1) cv::cvtColor(color, color, cv::COLOR_GRAY2BGR);
+  else if (color.channels() == 4) cv::cvtColor(color, color, cv::COLOR_BGRA2BGR);
+  cv::Mat depth = cv::imread(e.depth_path, cv::IMREAD_UNCHANGED);
+  if (depth.empty()) throw InputError(e.depth_path + ": missing or unreadable depth image");
+  if (depth.type() != CV_16UC1)
+    throw InputError(e.depth_path + ": depth image must be 16-bit single-channel PNG (got " +
+                     std::to_string(depth.elemSize1() * 8) + "-bit, " + std::to_string(depth.channels()) +
+                     " channel(s))");
+  const auto check = [&](const cv::Mat& m, const std::string& path) {
+    if (m.cols != camera_.width || m.rows != camera_.height)
+      throw InputError(path + ": image is " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
+                       ", the camera is " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  };
+  check(color, e.rgb_path);
+  check(depth, e.depth_path);
+  return makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
+}
+
+TumWriter::TumWriter(std::string dir, const CameraIntrinsics& camera, double depth_scale)
+    : dir_(std::move(dir)), camera_(camera), depth_scale_(depth_scale) {
+  fs::create_directories(fs::path(dir_) / "rgb");
+  fs::create_directories(fs::path(dir_) / "depth");
+}
+
+void TumWriter::add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_m, const SE3& T_world_cam,
+                    const cv::Mat& mask) {
+  const std::string name = timestampName(timestamp) + ".png";
+  const fs::path root(dir_);
+  if (!cv::imwrite((root / "rgb" / name).string(), bgr8)) throw InputError(dir_ + ": cannot write rgb/" + name);
+  cv::Mat d16;
+  depth_m.convertTo(d16, CV_16U, depth_scale_);
+  if (!cv::imwrite((root / "depth" / name).string(), d16)) throw InputError(dir_ + ": cannot write depth/" + name);
+  if (!mask.empty()) {
+    if (!masks_) fs::create_directories(root / "masks");
+    masks_ = true;
+    if (!cv::imwrite((root / "masks" / name).string(), mask)) throw InputError(dir_ + ": cannot write masks/" + name);
+  }
+  rgb_.emplace_back(timestamp, "rgb/" + name);
+  depth_.emplace_back(timestamp, "depth/" + name);
+  gt_.push_back({timestamp, T_world_cam});
+}
+
+void TumWriter::finish(const std::string& source_comment) {
+  const fs::path root(dir_);
+  const auto writeList = [&](const std::string& file, const std::string& what,
+                             const std::vector<std::pair<double, std::string>>& list) {
+    std::ofstream out(root / file);
+    out << "# " << what << "\n# " << source_comment << "\n# timestamp filename\n";
+    for (const auto& [t, f] : list) out << timestampName(t) << ' ' << f << '\n';
+    if (!out) throw InputError((root / file).string() + ": cannot write");
+  };
+  writeList("rgb.txt", "color images", rgb_);
+  writeList("depth.txt", "depth maps", depth_);
+  writeTrajectory((root / "groundtruth.txt").string(), gt_);
+  writeCameraFile((root / "camera.txt").string(), camera_);
+}
+
+void prepareOutputDir(const std::string& dir, bool overwrite) {
+  const fs::path p(dir);
+  if (fs::exists(p)) {
+    if (!fs::is_directory(p)) throw InputError(dir + ": output path exists and is not a folder");
+    if (!fs::is_empty(p) && !overwrite)
+      throw InputError(dir + ": output folder is not empty; choose another or pass --overwrite");
+  }
+  std::error_code ec;
+  fs::create_directories(p, ec);
+  if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
+}
+
+}  // namespace ff

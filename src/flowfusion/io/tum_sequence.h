@@ -1,0 +1,94 @@
+#pragma once
+// RGB-D sequences in the TUM RGB-D benchmark layout: rgb.txt, depth.txt ("timestamp filename"
+// lines, '#' comments), rgb/ and depth/ PNGs, optional groundtruth.txt, and optionally a
+// camera.txt with the intrinsics and masks/<timestamp>.png with ground-truth dynamic masks
+// (both written by `flowfusion synth` and `flowfusion augment`).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/io/trajectory_io.h"
+
+namespace ff {
+
+struct SequenceOptions {
+  double depth_scale = 5000.0;     // raw depth units per metre (TUM: 5000)
+  double max_time_diff = 0.02;     // s, colour-depth association limit (as the benchmark's associate.py)
+  std::string camera;              // "", "fr1|fr2|fr3" or "fx,fy,cx,cy": overrides detection
+};
+
+struct FrameEntry {
+  double rgb_timestamp = 0;    // s
+  std::string rgb_path;        // absolute or relative to the working directory
+  double depth_timestamp = 0;  // s
+  std::string depth_path;
+};
+
+// One timestamped file list ("timestamp filename"). Throws InputError naming the file and line
+// on malformed lines, unsorted or duplicate timestamps, or an empty list.
+std::vector<std::pair<double, std::string>> readFileList(const std::string& path);
+
+// Associates each colour timestamp with the nearest depth timestamp within max_diff, each depth
+// used at most once (greedy by time difference, as associate.py). Returns index pairs.
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<double>& a, const std::vector<double>& b,
+                                                 double max_diff);
+
+class TumSequence {
+ public:
+  // Reads the lists and resolves the camera: options.camera, else camera.txt in the folder, else
+  // the folder name (rgbd_dataset_freiburgN_* or frN_*). Throws InputError saying how to give
+  // intrinsics when none applies.
+  static TumSequence open(const std::string& dir, const SequenceOptions& options = {});
+
+  size_t size() const { return entries_.size(); }
+  const FrameEntry& entry(size_t i) const { return entries_.at(i); }
+  // Loads frame i and checks it: readable PNGs, 8-bit colour (3 channels; grey is expanded),
+  // 16-bit single-channel depth, both of the camera's size.
+  RgbdFrame load(size_t i) const;
+  const CameraIntrinsics& camera() const { return camera_; }
+  const std::string& dir() const { return dir_; }
+  const std::optional<Trajectory>& groundtruth() const { return groundtruth_; }
+  // masks/ folder when the sequence carries ground-truth dynamic masks.
+  std::optional<std::string> masksDir() const;
+
+ private:
+  std::string dir_;
+  SequenceOptions options_;
+  CameraIntrinsics camera_;
+  std::vector<FrameEntry> entries_;
+  std::optional<Trajectory> groundtruth_;
+};
+
+// camera.txt: one line "fx fy cx cy width height" ('#' comments), or a preset name fr1|fr2|fr3.
+CameraIntrinsics readCameraFile(const std::string& path);
+void writeCameraFile(const std::string& path, const CameraIntrinsics& camera);
+
+// Writes a sequence in the TUM layout (used by synth and augment). Depth in metres is stored as
+// 16-bit PNG at depth_scale units per metre; masks as 8-bit PNG (255 = dynamic).
+class TumWriter {
+ public:
+  TumWriter(std::string dir, const CameraIntrinsics& camera, double depth_scale = 5000.0);
+  void add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_m, const SE3& T_world_cam,
+           const cv::Mat& mask = {});
+  // Writes rgb.txt, depth.txt, groundtruth.txt and camera.txt.
+  void finish(const std::string& source_comment);
+
+ private:
+  std::string dir_;
+  CameraIntrinsics camera_;
+  double depth_scale_;
+  std::vector<std::pair<double, std::string>> rgb_, depth_;
+  Trajectory gt_;
+  bool masks_ = false;
+};
+
+// Makes `dir` ready for results: creates it, or accepts it if empty. A non-empty folder is an
+// InputError unless `overwrite` is set (then its content is kept and files are replaced).
+void prepareOutputDir(const std::string& dir, bool overwrite);
+
+// "%.6f" of a timestamp, the file stem used for every per-frame file.
+std::string timestampName(double t);
+
+}  // namespace ff
