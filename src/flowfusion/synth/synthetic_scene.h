@@ -1,0 +1,130 @@
+#pragma once
+// Synthetic dynamic RGB-D scenes with exact ground truth (camera poses, depth, dynamic masks).
+//
+// A procedurally generated room (walls, floor, ceiling, furniture-sized boxes, pictures) textured
+// with fractal 1/f noise, wood grain, blobs and edges, lit by a view-independent point light (so
+// brightness constancy holds exactly for static surfaces), seen by a hand-held-like camera on a
+// smooth trajectory, with K rigid moving objects (upright person-sized shapes and boxes).
+// Everything is analytic ray casting: per pixel the nearest hit of planes and boxes.
+//
+// World frame: metres, z up, the room spans [0, W] x [0, D] x [0, H]. Camera frame: x right,
+// y down, z forward (optical axis). Depth is z in the camera frame.
+//
+// Determinism: everything derives from the seed through mt19937_64 and hand-written
+// distributions; per-pixel noise uses a counter-based hash of (seed, frame, pixel), so results do
+// not depend on thread scheduling. The room and camera come from one random stream and the
+// objects from another, so `objects = 0` gives the static twin of the same room and trajectory.
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/se3.h"
+#include "flowfusion/io/tum_sequence.h"
+
+namespace ff::synth {
+
+// Bumped whenever the same seed would produce different images; written to scene.json.
+inline constexpr int kGeneratorVersion = 1;
+
+struct SynthConfig {
+  uint64_t seed = 1;        // selects room, trajectory, objects and noise
+  int frames = 300;         // number of frames
+  int objects = 2;          // number of moving objects (0: the static twin)
+  int width = 640;          // image size, pixels; the fr1 intrinsics are scaled to it
+  int height = 480;
+  double fps = 30;          // frame rate, Hz
+  double start_time = 1.0;  // timestamp of frame 0, s
+  double camera_speed = 0.25;          // RMS translational speed of the camera, m/s (TUM: up to ~0.5)
+  double camera_angular_speed = 15.0;  // RMS angular speed of the camera, deg/s (TUM: up to ~50)
+  double object_speed = 0.5;           // RMS speed of the moving objects' centres, m/s
+  bool noise = true;        // false: exact analytic depth with no holes and noise-free colour (for tests)
+  double min_depth = 0.4;   // m, nearer surfaces have no depth (noise = true only)
+  double max_depth = 6.0;   // m, farther surfaces have no depth (noise = true only)
+  double color_noise = 1.5; // colour sensor noise sigma, 8-bit levels (noise = true only)
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, frames, objects, width, height, fps, start_time,
+                                                camera_speed, camera_angular_speed, object_speed, noise, min_depth,
+                                                max_depth, color_noise)
+
+struct SynthFrame {
+  RgbdFrame frame;        // colour, intensity, depth (metres, noisy and quantised to 1/5000 m unless noise = false)
+  SE3 T_world_cam;        // exact
+  cv::Mat mask;           // CV_8UC1, 255 where a moving object is visible, else 0
+  cv::Mat object_id;      // CV_8UC1, 0 = static scene, k + 1 = moving object k
+  cv::Mat depth_clean;    // CV_32FC1, exact depth of the visible surface, m (0 = none)
+};
+
+// Kinect-like depth noise: sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres (Nguyen et al. 2012).
+double depthNoiseSigma(double z_m);
+
+class SceneModel;  // geometry, textures and motion (synthetic_scene.cpp)
+
+class SyntheticScene {
+ public:
+  // Throws InputError on a nonsensical configuration (sizes, counts, rates).
+  explicit SyntheticScene(const SynthConfig& config);
+  ~SyntheticScene();
+  SyntheticScene(SyntheticScene&&) noexcept;
+  SyntheticScene& operator=(SyntheticScene&&) noexcept;
+
+  const SynthConfig& config() const { return config_; }
+  const CameraIntrinsics& camera() const { return camera_; }
+  int frameCount() const { return config_.frames; }
+  double timestamp(int i) const;   // s
+  SE3 cameraPose(int i) const;     // T_world_cam at frame i
+  SE3 cameraPoseAt(double time_s) const;
+  int objectCount() const;
+  SE3 objectPose(int k, double time_s) const;  // T_world_object of moving object k
+
+  SynthFrame render(int i) const;  // thread-safe, deterministic
+  // Any pose; objects are placed at time_s (a timestamp on the same clock as timestamp(i)).
+  // Noise is seeded by the time, so render(i) == renderAt(cameraPose(i), timestamp(i)).
+  SynthFrame renderAt(const SE3& T_world_cam, double time_s) const;
+
+  // scene.json content: seed, configuration, room, furniture, objects (sizes, paths), version.
+  nlohmann::json description() const;
+
+ private:
+  SynthConfig config_;
+  CameraIntrinsics camera_;
+  std::unique_ptr<SceneModel> model_;
+};
+
+// Writes every frame in the TUM layout (rgb/, depth/, masks/, rgb.txt, depth.txt, groundtruth.txt,
+// camera.txt) plus scene.json. A non-empty out_dir is an InputError unless overwrite is set.
+void writeSequence(const SyntheticScene& scene, const std::string& out_dir, bool overwrite = false);
+
+// Inserting moving objects into a real static sequence with ground-truth poses.
+struct AugmentConfig {
+  uint64_t seed = 1;           // selects objects, paths and noise
+  int objects = 2;             // number of inserted objects (>= 1)
+  int first_frame = 0;         // first colour frame used (index into rgb.txt after association)
+  int last_frame = -1;         // last colour frame used, inclusive (-1: the last one)
+  double min_distance = 0.7;   // m, nearest initial object distance from the first camera
+  double max_distance = 2.0;   // m, farthest initial object distance
+  double object_speed = 0.4;   // RMS speed of the objects, m/s
+  bool noise = true;           // Kinect-like noise and quantisation on the object depth
+  double max_pose_gap = 0.1;   // s, largest ground-truth gap bridged by interpolation
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AugmentConfig, seed, objects, first_frame, last_frame, min_distance,
+                                                max_distance, object_speed, noise, max_pose_gap)
+
+struct AugmentReport {
+  int frames_written = 0;
+  std::vector<double> dropped_timestamps;  // colour frames without an interpolable ground-truth pose
+};
+
+// Reads static_dir (TUM layout with groundtruth.txt), composites textured moving objects (depth
+// test against the real depth: the object wins where nearer or where the real depth is 0), writes
+// out_dir in the TUM layout with masks/, groundtruth.txt at the colour timestamps, camera.txt and
+// scene.json. Throws InputError on a missing folder or ground truth, an empty frame range, or a
+// non-empty out_dir without overwrite.
+AugmentReport augmentSequence(const std::string& static_dir, const std::string& out_dir,
+                              const AugmentConfig& config, const SequenceOptions& options = {},
+                              bool overwrite = false);
+
+}  // namespace ff::synth
