@@ -1,0 +1,381 @@
+#include "flowfusion/fusion/static_map.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+namespace {
+
+constexpr uint64_t kEmpty = std::numeric_limits<uint64_t>::max();
+
+// Positive floats compare like their bit patterns, so (depth, index) packs into one integer whose
+// minimum is the nearest surfel: a lock-free z-buffer.
+uint64_t depthKey(float depth_m, uint32_t index) {
+  return (static_cast<uint64_t>(std::bit_cast<uint32_t>(depth_m)) << 32) | index;
+}
+float keyDepth(uint64_t key) { return std::bit_cast<float>(static_cast<uint32_t>(key >> 32)); }
+uint32_t keyIndex(uint64_t key) { return static_cast<uint32_t>(key & 0xffffffffu); }
+
+void atomicMin(uint64_t& slot, uint64_t key) {
+  std::atomic_ref<uint64_t> ref(slot);
+  uint64_t current = ref.load(std::memory_order_relaxed);
+  while (key < current && !ref.compare_exchange_weak(current, key, std::memory_order_relaxed)) {
+  }
+}
+
+void requireRange(bool ok, const std::string& setting, const std::string& rule) {
+  if (!ok) throw InputError("fusion config: '" + setting + "' must be " + rule);
+}
+
+// One fused sample: camera-frame point and normal (facing the camera) at the fused resolution.
+struct Measurement {
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  float weight = 0;  // 0 = not fused
+  float radius = 0;
+};
+
+enum class Action : uint8_t { kNone, kMerge, kAdd };
+
+}  // namespace
+
+void validateFusionConfig(const FusionConfig& c) {
+  requireRange(c.integration_stride >= 1 && c.integration_stride <= 8, "integration_stride", "in 1..8");
+  requireRange(c.min_depth_m > 0 && c.max_depth_m > c.min_depth_m, "min_depth_m/max_depth_m",
+               "positive with min_depth_m < max_depth_m");
+  requireRange(c.min_static_weight > 0 && c.min_static_weight <= 1, "min_static_weight", "in (0, 1]");
+  requireRange(c.association_distance_m > 0, "association_distance_m", "positive");
+  requireRange(c.association_angle_deg > 0 && c.association_angle_deg <= 90, "association_angle_deg", "in (0, 90]");
+  requireRange(c.depth_discontinuity_ratio > 0, "depth_discontinuity_ratio", "positive");
+  requireRange(c.radius_scale > 0, "radius_scale", "positive");
+  requireRange(c.stable_confidence > 0, "stable_confidence", "positive");
+  requireRange(c.unstable_window_frames >= 1, "unstable_window_frames", "at least 1");
+  requireRange(c.free_space_margin_m > 0, "free_space_margin_m", "positive");
+  requireRange(c.free_space_votes >= 1, "free_space_votes", "at least 1");
+  requireRange(c.max_surfels >= 1, "max_surfels", "at least 1");
+  requireRange(c.keyframe_distance_m > 0 && c.keyframe_angle_deg > 0, "keyframe_distance_m/keyframe_angle_deg",
+               "positive");
+  requireRange(c.max_keyframes >= 2, "max_keyframes", "at least 2");
+  requireRange(c.mesh_voxel_m > 0 && c.mesh_truncation_m > c.mesh_voxel_m, "mesh_voxel_m/mesh_truncation_m",
+               "positive with mesh_truncation_m > mesh_voxel_m");
+}
+
+StaticMap::StaticMap(const FusionConfig& config) : config_(config) { validateFusionConfig(config_); }
+
+void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
+                          const cv::Mat& static_weight) {
+  const std::string what = "fusion input '" + frame.name + "'";
+  if (!camera.valid()) throw InputError(what + ": invalid camera intrinsics");
+  if (frame.depth.empty() || frame.depth.type() != CV_32FC1) throw InputError(what + ": depth must be CV_32FC1");
+  if (frame.depth.cols != camera.width || frame.depth.rows != camera.height)
+    throw InputError(what + ": depth is " + std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
+                     " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (frame.color.type() != CV_8UC3 || frame.color.size() != frame.depth.size())
+    throw InputError(what + ": colour must be CV_8UC3 of the depth's size");
+  if (frame.intensity.type() != CV_32FC1 || frame.intensity.size() != frame.depth.size())
+    throw InputError(what + ": intensity must be CV_32FC1 of the depth's size");
+  if (!static_weight.empty() && (static_weight.type() != CV_32FC1 || static_weight.size() != frame.depth.size()))
+    throw InputError(what + ": static weight must be CV_32FC1 of the depth's size (or empty)");
+
+  const int stride = config_.integration_stride;
+  const int gw = (camera.width + stride - 1) / stride;
+  const int gh = (camera.height + stride - 1) / stride;
+  const float min_depth = static_cast<float>(config_.min_depth_m);
+  const float max_depth = static_cast<float>(config_.max_depth_m);
+  const float discontinuity = static_cast<float>(config_.depth_discontinuity_ratio);
+  const float min_weight = static_cast<float>(config_.min_static_weight);
+  const float pixel_footprint = static_cast<float>(config_.radius_scale * stride / std::min(camera.fx, camera.fy));
+  const cv::Mat& depth = frame.depth;
+
+  auto validDepth = [&](int x, int y) {
+    const float z = depth.at<float>(y, x);
+    return z >= min_depth && z <= max_depth ? z : 0.0f;
+  };
+  auto pointAt = [&](int x, int y, float z) {
+    return Eigen::Vector3f(static_cast<float>((x - camera.cx) / camera.fx) * z,
+                           static_cast<float>((y - camera.cy) / camera.fy) * z, z);
+  };
+
+  // 1. Measurements at the fused resolution; grid_depth (all valid depths, whatever their
+  // weight) is the free-space evidence.
+  std::vector<Measurement> meas(static_cast<size_t>(gw) * gh);
+  std::vector<float> grid_depth(meas.size(), 0.0f);
+  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const int y = j * stride;
+      for (int i = 0; i < gw; ++i) {
+        const int x = i * stride;
+        const float z = validDepth(x, y);
+        grid_depth[j * gw + i] = z;
+        if (z == 0) continue;
+        const float w = static_weight.empty() ? 1.0f : static_weight.at<float>(y, x);
+        if (!(w >= min_weight)) continue;
+        const Eigen::Vector3f p = pointAt(x, y, z);
+        // Central differences where the neighbour is on the same surface, one-sided otherwise.
+        auto neighbour = [&](int nx, int ny, Eigen::Vector3f& out) {
+          if (nx < 0 || ny < 0 || nx >= camera.width || ny >= camera.height) return false;
+          const float nz = validDepth(nx, ny);
+          if (nz == 0 || std::abs(nz - z) > discontinuity * z) return false;
+          out = pointAt(nx, ny, nz);
+          return true;
+        };
+        auto difference = [&](int dx, int dy, Eigen::Vector3f& out) {
+          Eigen::Vector3f a, b;
+          const bool ha = neighbour(x + dx, y + dy, a), hb = neighbour(x - dx, y - dy, b);
+          if (ha && hb) out = a - b;
+          else if (ha) out = a - p;
+          else if (hb) out = p - b;
+          return ha || hb;
+        };
+        Eigen::Vector3f du, dv;
+        if (!difference(stride, 0, du) || !difference(0, stride, dv)) continue;
+        Eigen::Vector3f n = dv.cross(du);
+        const float len = n.norm();
+        if (len <= 0) continue;
+        n /= len;
+        const Eigen::Vector3f view = p.normalized();
+        float cos_view = -n.dot(view);
+        if (cos_view < 0) {
+          n = -n;
+          cos_view = -cos_view;
+        }
+        Measurement& m = meas[j * gw + i];
+        m.point = p;
+        m.normal = n;
+        m.weight = std::min(w, 1.0f);
+        m.radius = pixel_footprint * z / std::max(cos_view, 0.3f);
+      }
+    }
+  });
+
+  // 2. Index map: the nearest surfel per fused pixel; free-space votes for surfels in front of
+  // the measured surface.
+  const SE3 T_cam_world = T_world_cam.inverse();
+  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
+  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float inv_stride = 1.0f / stride;
+  const float margin = static_cast<float>(config_.free_space_margin_m);
+  std::vector<uint64_t> index_map(meas.size(), kEmpty);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      Surfel& s = surfels_[k];
+      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+      if (pc.z() < min_depth) continue;
+      const int i = static_cast<int>(std::lround((fx * pc.x() / pc.z() + cx) * inv_stride));
+      const int j = static_cast<int>(std::lround((fy * pc.y() / pc.z() + cy) * inv_stride));
+      if (i < 0 || j < 0 || i >= gw || j >= gh) continue;
+      atomicMin(index_map[j * gw + i], depthKey(pc.z(), static_cast<uint32_t>(k)));
+      float nearest = std::numeric_limits<float>::max();
+      bool all_valid = i > 0 && j > 0 && i < gw - 1 && j < gh - 1;
+      for (int dj = -1; dj <= 1 && all_valid; ++dj)
+        for (int di = -1; di <= 1 && all_valid; ++di) {
+          const float d = grid_depth[(j + dj) * gw + i + di];
+          all_valid = d > 0;
+          nearest = std::min(nearest, d);
+        }
+      if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.free_space_votes;
+    }
+  });
+
+  // 3. Decide per fused pixel (read-only), then apply. A pixel updates only the surfel nearest
+  // at that pixel, so no two pixels write the same surfel.
+  const float assoc = static_cast<float>(config_.association_distance_m);
+  const float cos_assoc = static_cast<float>(std::cos(config_.association_angle_deg * M_PI / 180.0));
+  std::vector<Action> action(meas.size(), Action::kNone);
+  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < gw; ++i) {
+        const Measurement& m = meas[j * gw + i];
+        if (m.weight == 0) continue;
+        const float tolerance = assoc * std::max(1.0f, m.point.z());
+        const uint64_t key = index_map[j * gw + i];
+        if (key != kEmpty && std::abs(keyDepth(key) - m.point.z()) < tolerance) {
+          const Eigen::Vector3f n_cam = R_cam_world * surfels_[keyIndex(key)].normal;
+          if (n_cam.dot(m.normal) > cos_assoc) {
+            action[j * gw + i] = Action::kMerge;
+            continue;
+          }
+        }
+        // A surfel of a neighbouring pixel whose disc already covers this point: nothing to add.
+        bool covered = false;
+        for (int dj = -1; dj <= 1 && !covered; ++dj)
+          for (int di = -1; di <= 1 && !covered; ++di) {
+            const int ni = i + di, nj = j + dj;
+            if (ni < 0 || nj < 0 || ni >= gw || nj >= gh) continue;
+            const uint64_t nkey = index_map[nj * gw + ni];
+            if (nkey == kEmpty) continue;
+            const Surfel& s = surfels_[keyIndex(nkey)];
+            const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+            covered = (pc - m.point).norm() < std::max(s.radius, tolerance);
+          }
+        if (!covered) action[j * gw + i] = Action::kAdd;
+      }
+  });
+
+  const Eigen::Matrix3f R_world_cam = T_world_cam.linear().cast<float>();
+  const Eigen::Vector3f t_world_cam = T_world_cam.translation().cast<float>();
+  const int frame_index = frame_index_;
+  auto bgrAt = [&](int i, int j) { return frame.color.at<cv::Vec3b>(j * stride, i * stride); };
+  auto intensityAt = [&](int i, int j) { return frame.intensity.at<float>(j * stride, i * stride); };
+  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < gw; ++i) {
+        if (action[j * gw + i] != Action::kMerge) continue;
+        const Measurement& m = meas[j * gw + i];
+        Surfel& s = surfels_[keyIndex(index_map[j * gw + i])];
+        const float c = s.confidence, w = m.weight, sum = c + w;
+        s.position = (c * s.position + w * (R_world_cam * m.point + t_world_cam)) / sum;
+        s.normal = (c * s.normal + w * (R_world_cam * m.normal)).normalized();
+        s.radius = (c * s.radius + w * m.radius) / sum;
+        const cv::Vec3b bgr = bgrAt(i, j);
+        for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = (c * s.bgr[ch] + w * bgr[ch]) / sum;
+        s.intensity = (c * s.intensity + w * intensityAt(i, j)) / sum;
+        s.confidence = sum;
+        s.last_seen = frame_index;
+        s.free_space_votes = std::max(0, s.free_space_votes - 1);
+      }
+  });
+
+  // 4. Remove surfels seen through and those that never became stable.
+  const float stable = static_cast<float>(config_.stable_confidence);
+  const int window = config_.unstable_window_frames;
+  const int votes = config_.free_space_votes;
+  std::erase_if(surfels_, [&](const Surfel& s) {
+    return s.free_space_votes >= votes || (s.confidence < stable && frame_index - s.created > window);
+  });
+
+  // 5. New surfels, within the memory budget.
+  const size_t budget = static_cast<size_t>(config_.max_surfels);
+  for (int j = 0; j < gh; ++j)
+    for (int i = 0; i < gw; ++i) {
+      if (action[j * gw + i] != Action::kAdd) continue;
+      if (surfels_.size() >= budget) {
+        if (!budget_reached_)
+          spdlog::warn("fusion: the map reached its budget of {} surfels (setting max_surfels); new surfaces "
+                       "are no longer added",
+                       config_.max_surfels);
+        budget_reached_ = true;
+        break;
+      }
+      const Measurement& m = meas[j * gw + i];
+      Surfel s;
+      s.position = R_world_cam * m.point + t_world_cam;
+      s.normal = R_world_cam * m.normal;
+      s.radius = m.radius;
+      s.confidence = m.weight;
+      const cv::Vec3b bgr = bgrAt(i, j);
+      for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = bgr[ch];
+      s.intensity = intensityAt(i, j);
+      s.created = s.last_seen = frame_index;
+      surfels_.push_back(s);
+    }
+
+  updateKeyframes(T_world_cam, camera);
+  ++frame_index_;
+}
+
+void StaticMap::updateKeyframes(const SE3& T_world_cam, const CameraIntrinsics& camera) {
+  keyframe_camera_ = camera;
+  if (!keyframes_.empty()) {
+    const SE3 T_last_cam = keyframes_.back().inverse() * T_world_cam;
+    if (translationNorm(T_last_cam) < config_.keyframe_distance_m &&
+        rotationAngleDeg(T_last_cam) < config_.keyframe_angle_deg)
+      return;
+  }
+  keyframes_.push_back(T_world_cam);
+  if (static_cast<int>(keyframes_.size()) > config_.max_keyframes) {
+    // Keep every second one so the kept poses stay spread over the whole sequence.
+    std::vector<SE3> thinned;
+    for (size_t k = 0; k < keyframes_.size(); k += 2) thinned.push_back(keyframes_[k]);
+    keyframes_ = std::move(thinned);
+  }
+}
+
+ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
+  if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
+  const int w = camera.width, h = camera.height;
+  const SE3 T_cam_world = T_world_cam.inverse();
+  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
+  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float min_depth = static_cast<float>(config_.min_depth_m);
+  // Discs larger than this (pixels, half width) are clipped: only views much closer than any
+  // fused one produce them, and the cost grows with the square.
+  constexpr int kMaxHalfSplat = 8;
+
+  std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const Surfel& s = surfels_[k];
+      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+      if (pc.z() < min_depth) continue;
+      const Eigen::Vector3f nc = R_cam_world * s.normal;
+      const float n_dot_p = nc.dot(pc);
+      if (n_dot_p >= 0) continue;  // seen from behind
+      const float u = fx * pc.x() / pc.z() + cx, v = fy * pc.y() / pc.z() + cy;
+      const float radius_px = s.radius * std::max(fx, fy) / pc.z();
+      const int half = std::min(kMaxHalfSplat, static_cast<int>(std::ceil(radius_px)));
+      const int u0 = static_cast<int>(std::lround(u)), v0 = static_cast<int>(std::lround(v));
+      const float r2 = s.radius * s.radius;
+      for (int y = std::max(0, v0 - half); y <= std::min(h - 1, v0 + half); ++y)
+        for (int x = std::max(0, u0 - half); x <= std::min(w - 1, u0 + half); ++x) {
+          // Where the pixel's ray meets the surfel's plane, if inside its disc.
+          const Eigen::Vector3f ray((x - cx) / fx, (y - cy) / fy, 1.0f);
+          const float denom = nc.dot(ray);
+          if (denom > -1e-4f) continue;
+          const float z = n_dot_p / denom;
+          if (z < min_depth || (z * ray - pc).squaredNorm() > r2) continue;
+          atomicMin(zbuffer[static_cast<size_t>(y) * w + x], depthKey(z, static_cast<uint32_t>(k)));
+        }
+    }
+  });
+
+  ModelPrediction out;
+  out.depth = cv::Mat::zeros(h, w, CV_32FC1);
+  out.intensity = cv::Mat::zeros(h, w, CV_32FC1);
+  out.color = cv::Mat::zeros(h, w, CV_8UC3);
+  out.normal = cv::Mat::zeros(h, w, CV_32FC3);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
+        if (key == kEmpty) continue;
+        const Surfel& s = surfels_[keyIndex(key)];
+        out.depth.at<float>(y, x) = keyDepth(key);
+        out.intensity.at<float>(y, x) = s.intensity;
+        out.color.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(s.bgr[0]),
+                                                  cv::saturate_cast<uchar>(s.bgr[1]),
+                                                  cv::saturate_cast<uchar>(s.bgr[2]));
+        const Eigen::Vector3f nc = R_cam_world * s.normal;
+        out.normal.at<cv::Vec3f>(y, x) = cv::Vec3f(nc.x(), nc.y(), nc.z());
+      }
+  });
+  return out;
+}
+
+MapPoints StaticMap::points() const {
+  MapPoints out;
+  for (const Surfel& s : surfels_) {
+    if (s.confidence < config_.stable_confidence) continue;
+    out.positions.push_back(s.position);
+    out.normals.push_back(s.normal);
+    out.colors.emplace_back(cv::saturate_cast<uchar>(s.bgr[0]), cv::saturate_cast<uchar>(s.bgr[1]),
+                            cv::saturate_cast<uchar>(s.bgr[2]));
+  }
+  return out;
+}
+
+}  // namespace ff

@@ -1,0 +1,165 @@
+#pragma once
+// Dense map of the static background: a surfel map in the style of ElasticFusion / StaticFusion,
+// fed per pixel with the static weight (1 - b) of the segmentation, rendered for frame-to-model
+// tracking, exported as PLY.
+//
+// Why surfels and not a TSDF (measured with build-*/bench/flowfusion_microbench, 2 cores, 640x480,
+// synthetic room; see bench/bench_fusion.cpp and the numbers in the report of issue 5):
+// - Open3D's legacy ScalableTSDFVolume (the only TSDF that runs on CPU in Debian's Open3D 0.16)
+//   integrates one 640x480 frame in ~20-40 ms at 1 cm voxels (BM_Open3dTsdfIntegrate) and has no
+//   ray caster, so model prediction would need a second, hand-written volume traversal on top:
+//   the 10 ms per frame budget for integrate + predict is out of reach.
+// - This surfel map integrates at 320x240 with an index-map projection and predicts 640x480 by
+//   splatting surfel discs (ray-disc intersection, so planes come out exact): a few ms per frame
+//   (BM_SurfelIntegratePredict), and on exact synthetic data the map points lie within a few
+//   millimetres of the true surfaces (tests/fusion).
+// - Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
+//   measured depth (the camera sees through it) gets a free-space vote; a surfel with more votes
+//   than support is removed. Surfels that never become stable (confidence below
+//   stable_confidence within unstable_window_frames) are removed too. A background that was
+//   occluded gets new surfels as soon as it is seen with weight.
+// A triangle mesh is made at export time by integrating the model's own predictions at the stored
+// keyframe poses into an Open3D ScalableTSDFVolume (CPU), so the mesh holds only static surfels.
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/se3.h"
+
+namespace ff {
+
+struct FusionConfig {
+  // Input pixels fused per frame: every stride-th pixel in x and y (2: 640x480 is fused at 320x240).
+  int integration_stride = 2;
+  // Depth range fused, metres along the optical axis.
+  double min_depth_m = 0.2;
+  double max_depth_m = 4.0;
+  // Pixels with static weight (1 - b) below this are not fused (treated as dynamic).
+  double min_static_weight = 0.1;
+  // A measurement updates the surfel at its pixel when their depths differ by less than
+  // association_distance_m * max(1, depth in metres) and their normals by less than
+  // association_angle_deg.
+  double association_distance_m = 0.02;
+  double association_angle_deg = 30.0;
+  // Neighbouring depths that differ by more than this fraction of the depth are a discontinuity:
+  // no normal, no surfel there.
+  double depth_discontinuity_ratio = 0.05;
+  // Surfel radius = radius_scale * pixel footprint at the fused resolution / max(cos(view angle), 0.3).
+  double radius_scale = 0.8;
+  // A surfel is stable once its summed weight reaches this; unstable surfels older than
+  // unstable_window_frames are removed (noise and transient objects never get stable).
+  double stable_confidence = 2.0;
+  int unstable_window_frames = 20;
+  // Free space: a surfel that projects in front of the measured depth (minimum over its 3x3
+  // neighbourhood at the fused resolution) by more than free_space_margin_m * max(1, depth) gets a
+  // vote; each association takes one away; free_space_votes votes remove it.
+  double free_space_margin_m = 0.05;
+  int free_space_votes = 2;
+  // Memory budget: at most this many surfels (about 64 bytes each). When reached no new surfels
+  // are added (existing ones still update), budgetReached() turns true and one warning is logged.
+  int max_surfels = 3000000;
+  // A new keyframe pose (used for the mesh export) is stored when the camera moved this far from
+  // the last one; at most max_keyframes are kept (evenly thinned beyond that).
+  double keyframe_distance_m = 0.1;
+  double keyframe_angle_deg = 10.0;
+  int max_keyframes = 60;
+  // Mesh export: TSDF voxel size and truncation, metres.
+  double mesh_voxel_m = 0.01;
+  double mesh_truncation_m = 0.04;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, integration_stride, min_depth_m, max_depth_m,
+                                                min_static_weight, association_distance_m, association_angle_deg,
+                                                depth_discontinuity_ratio, radius_scale, stable_confidence,
+                                                unstable_window_frames, free_space_margin_m, free_space_votes,
+                                                max_surfels, keyframe_distance_m, keyframe_angle_deg, max_keyframes,
+                                                mesh_voxel_m, mesh_truncation_m)
+
+// Throws InputError naming the setting when a value is out of range.
+void validateFusionConfig(const FusionConfig& config);
+
+// The model seen from one camera. Pixels the model does not cover hold 0 in every image.
+struct ModelPrediction {
+  cv::Mat depth;      // CV_32FC1, metres along the optical axis, 0 = none
+  cv::Mat intensity;  // CV_32FC1 in [0, 1]
+  cv::Mat color;      // CV_8UC3, BGR
+  cv::Mat normal;     // CV_32FC3, unit normals in the camera frame (facing the camera), 0 = none
+};
+
+// Map points for evaluation and export (world frame).
+struct MapPoints {
+  std::vector<Eigen::Vector3f> positions;  // metres
+  std::vector<Eigen::Vector3f> normals;    // unit
+  std::vector<cv::Vec3b> colors;           // BGR
+};
+
+struct Surfel {
+  Eigen::Vector3f position;  // world, metres
+  Eigen::Vector3f normal;    // world, unit
+  float radius = 0;          // metres
+  float confidence = 0;      // summed static weight of the fused measurements
+  float bgr[3] = {0, 0, 0};  // 0..255
+  float intensity = 0;       // [0, 1]
+  int32_t created = 0;       // frame index of creation
+  int32_t last_seen = 0;     // frame index of the last update
+  int32_t free_space_votes = 0;
+};
+
+class StaticMap {
+ public:
+  explicit StaticMap(const FusionConfig& config = {});
+
+  // Fuses one frame seen at T_world_cam. static_weight: CV_32FC1 in [0, 1] per pixel (1 - b, 0 =
+  // dynamic), the frame's size, or empty for all static. Throws InputError on mismatched sizes or
+  // types.
+  void integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
+                 const cv::Mat& static_weight = {});
+
+  // Renders the model at T_world_cam with `camera` (any resolution).
+  ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
+
+  size_t size() const { return surfels_.size(); }
+  bool budgetReached() const { return budget_reached_; }
+  int framesIntegrated() const { return frame_index_; }
+  const std::vector<Surfel>& surfels() const { return surfels_; }
+  const FusionConfig& config() const { return config_; }
+  // Camera poses kept for the mesh export and the previews.
+  const std::vector<SE3>& keyframePoses() const { return keyframes_; }
+  // The camera of the last integrated frame.
+  const CameraIntrinsics& keyframeCamera() const { return keyframe_camera_; }
+
+  // Stable surfels only (what the exports hold).
+  MapPoints points() const;
+
+  // Coloured point cloud with normals (binary PLY). Throws InputError if the file cannot be written.
+  void exportPointCloud(const std::string& path) const;
+  // Triangle mesh with vertex colours (binary PLY). Throws InputError if the file cannot be written.
+  void exportMesh(const std::string& path) const;
+
+ private:
+  void updateKeyframes(const SE3& T_world_cam, const CameraIntrinsics& camera);
+
+  FusionConfig config_;
+  std::vector<Surfel> surfels_;
+  std::vector<SE3> keyframes_;
+  CameraIntrinsics keyframe_camera_;
+  int frame_index_ = 0;
+  bool budget_reached_ = false;
+};
+
+// Shaded view of the map (surfel colours times a headlight Lambert term) at T_world_cam; background
+// black. CV_8UC3 BGR of the camera's size.
+cv::Mat renderPreview(const StaticMap& map, const SE3& T_world_cam, const CameraIntrinsics& camera);
+// Writes preview_<i>.png into `dir` (created if needed) from a few viewpoints around the map: the
+// first keyframe and views orbiting the map's centre. Returns the paths written.
+std::vector<std::string> writePreviews(const StaticMap& map, const std::string& dir);
+// Colour frame with the dynamic pixels tinted red. mask: CV_8UC1 (non-zero = dynamic) or CV_32FC1
+// (dynamic score in [0, 1]), same size as bgr.
+cv::Mat overlayMask(const cv::Mat& bgr, const cv::Mat& mask);
+
+}  // namespace ff

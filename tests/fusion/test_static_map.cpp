@@ -1,0 +1,235 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <open3d/geometry/PointCloud.h>
+#include <open3d/geometry/TriangleMesh.h>
+#include <open3d/io/PointCloudIO.h>
+#include <open3d/io/TriangleMeshIO.h>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/fusion/static_map.h"
+#include "room_fixture.h"
+#include "testing/test_util.h"
+
+namespace ff {
+namespace {
+
+using testing::RoomFixture;
+
+cv::Mat staticWeight(const cv::Mat& mask) {
+  cv::Mat w;
+  mask.convertTo(w, CV_32F, -1.0 / 255.0, 1.0);
+  return w;
+}
+
+StaticMap fuse(const RoomFixture& room, bool use_masks, const FusionConfig& config = {}) {
+  StaticMap map(config);
+  for (int i = 0; i < room.frames; ++i) {
+    const auto v = room.render(i);
+    map.integrate(v.frame, room.camera, room.pose(i), use_masks ? staticWeight(v.mask) : cv::Mat());
+  }
+  return map;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 1e9;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Fraction of map points inside the volume the sphere swept, leaving out its final position
+// (which the last frames legitimately see) when `skip_final` is set.
+double ghostFraction(const StaticMap& map, const RoomFixture& room, bool skip_final) {
+  const MapPoints pts = map.points();
+  size_t ghosts = 0;
+  for (const auto& p : pts.positions) {
+    const Eigen::Vector3d q = p.cast<double>();
+    if (skip_final && (q - room.sphereCentre(room.frames - 1)).norm() < room.sphere_radius_m + 0.03) continue;
+    if (room.distanceToSweep(q) < room.sphere_radius_m + 0.01) ++ghosts;
+  }
+  return pts.positions.empty() ? 1.0 : static_cast<double>(ghosts) / pts.positions.size();
+}
+
+TEST(StaticMap, StaticRoomSurfacesWithinMillimetres) {
+  RoomFixture room;
+  const StaticMap map = fuse(room, false);
+  const MapPoints pts = map.points();
+  ASSERT_GT(pts.positions.size(), 10000u);
+  double sum = 0, worst = 0;
+  for (const auto& p : pts.positions) {
+    const double d = room.distanceToRoom(p.cast<double>());
+    sum += d;
+    worst = std::max(worst, d);
+  }
+  const double mean = sum / pts.positions.size();
+  std::printf("static room: %zu surfels (%zu stable), mean distance %.2f mm, max %.2f mm\n", map.size(),
+              pts.positions.size(), mean * 1e3, worst * 1e3);
+  EXPECT_LT(mean, 0.01);
+  EXPECT_LT(mean, 0.003);  // exact data: only the surfel discretisation remains
+  ASSERT_EQ(pts.colors.size(), pts.positions.size());
+  ASSERT_EQ(pts.normals.size(), pts.positions.size());
+}
+
+TEST(StaticMap, PredictionReproducesDepthAtFusedPoseAndCoarserLevel) {
+  RoomFixture room;
+  room.frames = 12;
+  const StaticMap map = fuse(room, false);
+  for (int level : {0, 1}) {
+    const CameraIntrinsics cam = room.camera.atLevel(level);
+    const SE3 pose = room.pose(room.frames - 1);
+    const auto truth = room.render(pose, cam, -1);
+    const ModelPrediction pred = map.predict(pose, cam);
+    ASSERT_EQ(pred.depth.size(), truth.frame.depth.size());
+    ASSERT_EQ(pred.intensity.type(), CV_32FC1);
+    ASSERT_EQ(pred.color.type(), CV_8UC3);
+    std::vector<double> depth_err, intensity_err;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const float zp = pred.depth.at<float>(y, x);
+        if (zp <= 0) continue;
+        depth_err.push_back(std::abs(zp - truth.frame.depth.at<float>(y, x)));
+        intensity_err.push_back(std::abs(pred.intensity.at<float>(y, x) - truth.frame.intensity.at<float>(y, x)));
+      }
+    const double coverage = static_cast<double>(depth_err.size()) / (cam.width * cam.height);
+    std::printf("level %d: coverage %.3f, median |depth diff| %.2f mm, median |intensity diff| %.4f\n", level,
+                coverage, median(depth_err) * 1e3, median(intensity_err));
+    EXPECT_GT(coverage, 0.95);
+    EXPECT_LT(median(depth_err), 0.01);
+    EXPECT_LT(median(intensity_err), 0.05);
+  }
+}
+
+TEST(StaticMap, MaskedMovingObjectLeavesNoGhostAndBackgroundFillsIn) {
+  RoomFixture room;
+  room.with_sphere = true;
+  const StaticMap map = fuse(room, true);
+  const double ghosts = ghostFraction(map, room, false);
+  std::printf("with masks: ghost fraction %.5f of %zu points\n", ghosts, map.points().positions.size());
+  EXPECT_LE(ghosts, 0.01);
+
+  // Where the sphere stood at frame 0, the wall behind it is now in the map.
+  const auto first = room.render(0);
+  const ModelPrediction pred = map.predict(room.pose(0), room.camera);
+  const auto wall = room.render(room.pose(0), room.camera, -1);
+  int hidden = 0, filled = 0;
+  for (int y = 0; y < room.camera.height; ++y)
+    for (int x = 0; x < room.camera.width; ++x) {
+      if (!first.mask.at<uchar>(y, x)) continue;
+      ++hidden;
+      const float z = pred.depth.at<float>(y, x);
+      if (z > 0 && std::abs(z - wall.frame.depth.at<float>(y, x)) < 0.02) ++filled;
+    }
+  ASSERT_GT(hidden, 100);
+  std::printf("background behind the first sphere position: %.3f filled\n", static_cast<double>(filled) / hidden);
+  EXPECT_GT(filled, 0.9 * hidden);
+}
+
+TEST(StaticMap, FreeSpaceRemovesGhostsWithoutMasks) {
+  RoomFixture room;
+  room.with_sphere = true;
+  const StaticMap carved = fuse(room, false);
+  FusionConfig no_carving;
+  no_carving.free_space_votes = 1000000;
+  no_carving.unstable_window_frames = 1000000;
+  const StaticMap kept = fuse(room, false, no_carving);
+  const double with = ghostFraction(carved, room, true), without = ghostFraction(kept, room, true);
+  std::printf("without masks: ghost fraction %.5f with free-space removal, %.5f without any removal\n", with,
+              without);
+  EXPECT_GT(without, 0.02);
+  EXPECT_LT(with, 0.01);
+}
+
+TEST(StaticMap, ExportedFilesLoadInOpen3d) {
+  RoomFixture room;
+  room.frames = 10;
+  const StaticMap map = fuse(room, false);
+  testing::TempDir dir;
+  const std::string mesh_path = dir.str() + "/map.ply", cloud_path = dir.str() + "/map_points.ply";
+  map.exportMesh(mesh_path);
+  map.exportPointCloud(cloud_path);
+
+  open3d::geometry::TriangleMesh mesh;
+  ASSERT_TRUE(open3d::io::ReadTriangleMesh(mesh_path, mesh));
+  EXPECT_GT(mesh.triangles_.size(), 1000u);
+  EXPECT_TRUE(mesh.HasVertexColors());
+  double mesh_err = 0;
+  for (const auto& v : mesh.vertices_) mesh_err += room.distanceToRoom(v);
+  EXPECT_LT(mesh_err / mesh.vertices_.size(), 0.01);
+
+  open3d::geometry::PointCloud cloud;
+  ASSERT_TRUE(open3d::io::ReadPointCloud(cloud_path, cloud));
+  EXPECT_EQ(cloud.points_.size(), map.points().positions.size());
+  EXPECT_TRUE(cloud.HasColors());
+  EXPECT_TRUE(cloud.HasNormals());
+}
+
+TEST(StaticMap, MemoryBudgetStopsGrowthWithAFlag) {
+  RoomFixture room;
+  room.frames = 6;
+  FusionConfig config;
+  config.max_surfels = 2000;
+  const StaticMap map = fuse(room, false, config);
+  EXPECT_TRUE(map.budgetReached());
+  EXPECT_LE(map.size(), 2000u);
+  const StaticMap roomy = fuse(room, false);
+  EXPECT_FALSE(roomy.budgetReached());
+}
+
+TEST(StaticMap, RejectsBadInputAndConfig) {
+  RoomFixture room;
+  StaticMap map;
+  const auto v = room.render(0);
+  CameraIntrinsics wrong = room.camera;
+  wrong.width = 640;
+  EXPECT_THROW(map.integrate(v.frame, wrong, room.pose(0)), InputError);
+  EXPECT_THROW(map.integrate(v.frame, room.camera, room.pose(0), cv::Mat::ones(10, 10, CV_32F)), InputError);
+  EXPECT_THROW(map.integrate(v.frame, room.camera, room.pose(0), v.mask), InputError);  // CV_8U, not a weight
+  RgbdFrame no_color = v.frame;
+  no_color.color = cv::Mat();
+  EXPECT_THROW(map.integrate(no_color, room.camera, room.pose(0)), InputError);
+  EXPECT_EQ(map.size(), 0u);
+  testing::TempDir dir;
+  EXPECT_THROW(map.exportMesh(dir.str() + "/empty.ply"), InputError);
+
+  FusionConfig bad;
+  bad.integration_stride = 0;
+  EXPECT_THROW(StaticMap{bad}, InputError);
+  const nlohmann::json j = FusionConfig{};
+  EXPECT_EQ(j.get<FusionConfig>().max_surfels, FusionConfig{}.max_surfels);
+  FusionConfig negative_budget = FusionConfig{};
+  negative_budget.max_surfels = -5;
+  EXPECT_THROW(StaticMap{negative_budget}, InputError);
+}
+
+TEST(StaticMap, PreviewsAndMaskOverlay) {
+  RoomFixture room;
+  room.frames = 10;
+  const StaticMap map = fuse(room, false);
+  testing::TempDir dir;
+  const auto paths = writePreviews(map, dir.str());
+  ASSERT_GE(paths.size(), 3u);
+  for (const auto& p : paths) {
+    const cv::Mat img = cv::imread(p);
+    ASSERT_FALSE(img.empty()) << p;
+    cv::Mat grey;
+    cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
+    EXPECT_GT(cv::countNonZero(grey), img.total() / 4) << p;
+  }
+
+  const cv::Mat bgr(4, 4, CV_8UC3, cv::Scalar(100, 100, 100));
+  cv::Mat mask = cv::Mat::zeros(4, 4, CV_8UC1);
+  mask.at<uchar>(1, 2) = 255;
+  const cv::Mat out = overlayMask(bgr, mask);
+  EXPECT_EQ(out.at<cv::Vec3b>(0, 0), cv::Vec3b(100, 100, 100));
+  const cv::Vec3b tinted = out.at<cv::Vec3b>(1, 2);
+  EXPECT_GT(tinted[2], 150);
+  EXPECT_LT(tinted[0], 60);
+  EXPECT_THROW(overlayMask(bgr, cv::Mat::zeros(3, 3, CV_8UC1)), InputError);
+}
+
+}  // namespace
+}  // namespace ff
