@@ -1,0 +1,97 @@
+// `flowfusion eval ate|rpe|seg`: the TUM benchmark's trajectory metrics and mask metrics.
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "command.h"
+#include "flowfusion/eval/segmentation_metrics.h"
+#include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/io/trajectory_io.h"
+
+namespace ff::app {
+namespace {
+
+struct EvalOptions {
+  std::string gt, est;
+  bool json = false;
+  double max_diff_s = 0.02;
+  double delta_s = 1.0;
+};
+
+void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
+  const std::pair<const char*, double> rows[] = {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+                                                 {"std", s.std},   {"min", s.min},   {"max", s.max}};
+  for (const auto& [name, v] : rows) std::printf("%s.%s %f %s\n", prefix, name, v, unit);
+}
+
+void runAte(const EvalOptions& o) {
+  const auto r = eval::computeAte(readTrajectory(o.gt), readTrajectory(o.est), o.max_diff_s, o.gt, o.est);
+  if (o.json) {
+    std::cout << nlohmann::json(r).dump(2) << '\n';
+    return;
+  }
+  // The line names of evaluate_ate.py --verbose, so existing parsers keep working.
+  std::printf("compared_pose_pairs %zu pairs\n", r.matched_poses);
+  printStats("absolute_translational_error", r.translation_m, "m");
+}
+
+void runRpe(const EvalOptions& o) {
+  const auto r = eval::computeRpe(readTrajectory(o.gt), readTrajectory(o.est), o.delta_s, o.gt, o.est);
+  if (o.json) {
+    std::cout << nlohmann::json(r).dump(2) << '\n';
+    return;
+  }
+  // evaluate_rpe.py --verbose lines (errors over delta), then the rates per second.
+  std::printf("compared_pose_pairs %zu pairs\n", r.pairs);
+  printStats("translational_error", r.translation_m, "m");
+  printStats("rotational_error", r.rotation_deg, "deg");
+  std::printf("delta %f s\n", r.delta_s);
+  std::printf("translational_error.rmse_per_second %f m/s\n", r.translation_rmse_m_per_s);
+  std::printf("rotational_error.rmse_per_second %f deg/s\n", r.rotation_rmse_deg_per_s);
+}
+
+void runSeg(const EvalOptions& o) {
+  const auto r = eval::evaluateSegmentation(o.gt, o.est);
+  if (o.json) {
+    std::cout << nlohmann::json(r).dump(2) << '\n';
+    return;
+  }
+  std::printf("frames %zu (unmatched: %zu ground truth, %zu estimated)\n", r.frames, r.gt_unmatched,
+              r.est_unmatched);
+  std::printf("mean_iou %f\nmean_precision %f\nmean_recall %f\n", r.mean_iou, r.mean_precision, r.mean_recall);
+  std::printf("pooled_iou %f\npooled_precision %f\npooled_recall %f\n", r.pooled.iou, r.pooled.precision,
+              r.pooled.recall);
+}
+
+const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
+  auto* eval = app.add_subcommand("eval", "Evaluate trajectories (TUM ATE/RPE) and dynamic masks");
+  eval->require_subcommand(1);
+  auto opts = std::make_shared<EvalOptions>();
+
+  auto* ate = eval->add_subcommand(
+      "ate", "Absolute trajectory error after Horn alignment, as the TUM benchmark's evaluate_ate.py");
+  ate->add_option("GT", opts->gt, "ground-truth trajectory (TUM format)")->required();
+  ate->add_option("EST", opts->est, "estimated trajectory (TUM format)")->required();
+  ate->add_option("--max-diff", opts->max_diff_s, "maximum timestamp difference for association, s")
+      ->capture_default_str();
+  ate->add_flag("--json", opts->json, "print the result as JSON");
+  ate->callback([opts] { runAte(*opts); });
+
+  auto* rpe = eval->add_subcommand(
+      "rpe", "Relative pose error over a fixed time delta, as evaluate_rpe.py --fixed_delta --delta_unit s");
+  rpe->add_option("GT", opts->gt, "ground-truth trajectory (TUM format)")->required();
+  rpe->add_option("EST", opts->est, "estimated trajectory (TUM format)")->required();
+  rpe->add_option("--delta", opts->delta_s, "time between the poses of a pair, s")->capture_default_str();
+  rpe->add_flag("--json", opts->json, "print the result as JSON");
+  rpe->callback([opts] { runRpe(*opts); });
+
+  auto* seg = eval->add_subcommand(
+      "seg", "IoU, precision and recall of dynamic masks (<timestamp>.png, >127 = dynamic)");
+  seg->add_option("GT_MASKS", opts->gt, "folder of ground-truth masks")->required();
+  seg->add_option("EST_MASKS", opts->est, "folder of estimated masks")->required();
+  seg->add_flag("--json", opts->json, "print the result as JSON");
+  seg->callback([opts] { runSeg(*opts); });
+}};
+
+}  // namespace
+}  // namespace ff::app

@@ -1,0 +1,47 @@
+#pragma once
+// Dynamic-object segmentation metrics: estimated masks against ground-truth masks.
+// Masks are 8-bit images, dynamic where the value is above 127 (written as 255), static elsewhere.
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace ff::eval {
+
+// Pixel counts of the dynamic class and the scores derived from them. Convention for empty
+// classes: a ratio 0/0 counts as 1 (nothing to get wrong): precision is 1 when nothing is
+// predicted dynamic, recall is 1 when nothing is dynamic in the ground truth, and IoU is 1 when
+// neither mask has a dynamic pixel. A frame predicting nothing where the ground truth has dynamic
+// pixels thus scores precision 1, recall 0, IoU 0.
+struct MaskScores {
+  int64_t true_positive = 0, false_positive = 0, false_negative = 0;
+  double iou = 1, precision = 1, recall = 1;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MaskScores, true_positive, false_positive, false_negative, iou, precision,
+                                   recall)
+
+// Scores from counts, with the 0/0 convention above.
+MaskScores scoresFromCounts(int64_t true_positive, int64_t false_positive, int64_t false_negative);
+
+// Both masks CV_8UC1 of the same size; throws InputError otherwise (gt_name/est_name name them).
+MaskScores compareMasks(const cv::Mat& gt, const cv::Mat& est, const std::string& gt_name = "ground-truth mask",
+                        const std::string& est_name = "estimated mask");
+
+struct SegmentationResult {
+  size_t frames = 0;           // matched mask pairs
+  size_t gt_unmatched = 0;     // ground-truth masks without an estimated mask
+  size_t est_unmatched = 0;    // estimated masks without a ground-truth mask
+  double mean_iou = 0, mean_precision = 0, mean_recall = 0;  // over frames
+  MaskScores pooled;           // counts and scores over all pixels of all frames together
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SegmentationResult, frames, gt_unmatched, est_unmatched, mean_iou,
+                                   mean_precision, mean_recall, pooled)
+
+// Folders of <timestamp>.png masks. Files are matched by the timestamp in their names (nearest
+// within 0.02 s, each used once, as associate.py); names that are not numbers match by identical
+// name. Masks are read as 8-bit grey (colour masks are converted). InputError naming the folder
+// or file on a missing folder, no mask in it, no matching pair, an unreadable or non-8-bit file,
+// or a size mismatch.
+SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::string& est_dir);
+
+}  // namespace ff::eval

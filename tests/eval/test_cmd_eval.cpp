@@ -1,0 +1,118 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "flowfusion/eval/trajectory_metrics.h"
+#include "testing/test_util.h"
+
+namespace ff::eval {
+namespace {
+
+using ff::testing::runFlowfusion;
+
+// Ground truth and a noisy, rigidly moved copy written to files, plus the library's answer on
+// the files as written (6-7 decimals).
+struct TrajectoryFiles {
+  ff::testing::TempDir dir;
+  std::string gt, est;
+  TrajectoryFiles() {
+    Trajectory g, e;
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.005);
+    SE3 T_other_world(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+    T_other_world.translation() = Eigen::Vector3d(1, 2, 3);
+    for (int k = 0; k < 300; ++k) {
+      const double t = 100 + 0.033 * k;
+      SE3 T(Eigen::AngleAxisd(0.01 * k, Eigen::Vector3d::UnitY()));
+      T.translation() = Eigen::Vector3d(0.3 * std::sin(0.05 * k), 0.002 * k, 0.1);
+      g.push_back({t, T});
+      SE3 E = T_other_world * T;
+      E.translation() += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      e.push_back({t + 0.004, E});
+    }
+    gt = (dir.path() / "gt.txt").string();
+    est = (dir.path() / "est.txt").string();
+    writeTrajectory(gt, g);
+    writeTrajectory(est, e);
+  }
+};
+
+double valueAfter(const std::string& text, const std::string& key) {
+  const auto pos = text.find(key + " ");
+  if (pos == std::string::npos) return NAN;
+  return std::stod(text.substr(pos + key.size() + 1));
+}
+
+TEST(CmdEval, AtePrintsTheScriptsLines) {
+  TrajectoryFiles f;
+  const auto expected = computeAte(readTrajectory(f.gt), readTrajectory(f.est));
+  const auto r = runFlowfusion("eval ate " + f.gt + " " + f.est);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(valueAfter(r.output, "compared_pose_pairs"), 300);
+  EXPECT_NEAR(valueAfter(r.output, "absolute_translational_error.rmse"), expected.translation_m.rmse, 1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "absolute_translational_error.max"), expected.translation_m.max, 1e-6);
+  // 5 mm per axis of noise: about 8.7 mm RMSE.
+  EXPECT_NEAR(expected.translation_m.rmse, 0.005 * std::sqrt(3.0), 0.001);
+
+  const auto j = runFlowfusion("eval ate --json " + f.gt + " " + f.est);
+  ASSERT_EQ(j.status, 0) << j.output;
+  const auto parsed = nlohmann::json::parse(j.output);
+  EXPECT_NEAR(parsed["translation_m"]["rmse"].get<double>(), expected.translation_m.rmse, 1e-12);
+  // 4 ms offsets are within --max-diff 0.02 but not within 0.003.
+  EXPECT_EQ(runFlowfusion("eval ate --max-diff 0.003 " + f.gt + " " + f.est).status, 2);
+}
+
+TEST(CmdEval, RpePrintsErrorsAndRates) {
+  TrajectoryFiles f;
+  const auto expected = computeRpe(readTrajectory(f.gt), readTrajectory(f.est), 0.5);
+  const auto r = runFlowfusion("eval rpe --delta 0.5 " + f.gt + " " + f.est);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(valueAfter(r.output, "compared_pose_pairs"), static_cast<double>(expected.pairs));
+  EXPECT_NEAR(valueAfter(r.output, "translational_error.rmse"), expected.translation_m.rmse, 1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "translational_error.rmse_per_second"), expected.translation_rmse_m_per_s,
+              1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "rotational_error.rmse"), expected.rotation_deg.rmse, 1e-6);
+}
+
+TEST(CmdEval, BadInputsExitWithStatus2AndNameTheFile) {
+  TrajectoryFiles f;
+  const std::string missing = (f.dir.path() / "missing.txt").string();
+  auto r = runFlowfusion("eval ate " + f.gt + " " + missing);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("missing.txt"), std::string::npos) << r.output;
+
+  const std::string bad = (f.dir.path() / "bad.txt").string();
+  std::ofstream(bad) << "# comment\n1.0 0 0 0 0 0 0 1\n2.0 0 0 zero 0 0 0 1\n";
+  r = runFlowfusion("eval rpe " + f.gt + " " + bad);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.txt:3"), std::string::npos) << r.output;
+
+  const std::string late = (f.dir.path() / "late.txt").string();
+  std::ofstream(late) << "5000.0 0 0 0 0 0 0 1\n5001.0 0 0 0 0 0 0 1\n5002.0 0 0 0 0 0 0 1\n";
+  r = runFlowfusion("eval rpe " + f.gt + " " + late);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("late.txt"), std::string::npos) << r.output;
+}
+
+TEST(CmdEval, SegPrintsMeanAndPooledScores) {
+  ff::testing::TempDir dir;
+  const auto gt_dir = dir.path() / "gt", est_dir = dir.path() / "est";
+  std::filesystem::create_directories(gt_dir);
+  std::filesystem::create_directories(est_dir);
+  cv::Mat gt(20, 20, CV_8UC1, cv::Scalar(0)), est(20, 20, CV_8UC1, cv::Scalar(0));
+  gt(cv::Rect(0, 0, 10, 10)).setTo(255);
+  est(cv::Rect(0, 0, 10, 5)).setTo(255);
+  cv::imwrite((gt_dir / "1.000000.png").string(), gt);
+  cv::imwrite((est_dir / "1.000000.png").string(), est);
+  const auto r = runFlowfusion("eval seg " + gt_dir.string() + " " + est_dir.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NEAR(valueAfter(r.output, "mean_iou"), 0.5, 1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "pooled_precision"), 1.0, 1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "pooled_recall"), 0.5, 1e-6);
+}
+
+}  // namespace
+}  // namespace ff::eval

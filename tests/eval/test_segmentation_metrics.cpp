@@ -1,0 +1,110 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/eval/segmentation_metrics.h"
+#include "testing/test_util.h"
+
+namespace ff::eval {
+namespace {
+
+cv::Mat rectMask(int x, int y, int w, int h, cv::Size size = {40, 30}) {
+  cv::Mat m(size, CV_8UC1, cv::Scalar(0));
+  if (w > 0 && h > 0) m(cv::Rect(x, y, w, h)).setTo(255);
+  return m;
+}
+
+TEST(CompareMasks, OverlappingRectanglesHaveKnownScores) {
+  // GT: 10x10 at (0,0) = 100 px; EST: 10x10 at (5,0) = 100 px; overlap 5x10 = 50 px.
+  const auto s = compareMasks(rectMask(0, 0, 10, 10), rectMask(5, 0, 10, 10));
+  EXPECT_EQ(s.true_positive, 50);
+  EXPECT_EQ(s.false_positive, 50);
+  EXPECT_EQ(s.false_negative, 50);
+  EXPECT_DOUBLE_EQ(s.iou, 50.0 / 150.0);
+  EXPECT_DOUBLE_EQ(s.precision, 0.5);
+  EXPECT_DOUBLE_EQ(s.recall, 0.5);
+}
+
+TEST(CompareMasks, ThresholdIsAbove127) {
+  cv::Mat gt(4, 4, CV_8UC1, cv::Scalar(128));
+  cv::Mat est(4, 4, CV_8UC1, cv::Scalar(127));
+  const auto s = compareMasks(gt, est);
+  EXPECT_EQ(s.false_negative, 16);
+  EXPECT_EQ(s.true_positive, 0);
+}
+
+TEST(CompareMasks, EmptyClassConventions) {
+  const auto both_empty = compareMasks(rectMask(0, 0, 0, 0), rectMask(0, 0, 0, 0));
+  EXPECT_EQ(both_empty.iou, 1);
+  EXPECT_EQ(both_empty.precision, 1);
+  EXPECT_EQ(both_empty.recall, 1);
+  const auto missed = compareMasks(rectMask(0, 0, 5, 5), rectMask(0, 0, 0, 0));
+  EXPECT_EQ(missed.iou, 0);
+  EXPECT_EQ(missed.precision, 1);  // nothing predicted: no false positive
+  EXPECT_EQ(missed.recall, 0);
+  const auto spurious = compareMasks(rectMask(0, 0, 0, 0), rectMask(0, 0, 5, 5));
+  EXPECT_EQ(spurious.iou, 0);
+  EXPECT_EQ(spurious.precision, 0);
+  EXPECT_EQ(spurious.recall, 1);
+}
+
+TEST(CompareMasks, SizeMismatchIsInputErrorNamingBoth) {
+  try {
+    compareMasks(rectMask(0, 0, 5, 5), rectMask(0, 0, 5, 5, {20, 30}), "gt/1.png", "est/1.png");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("gt/1.png"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("est/1.png"), std::string::npos) << msg;
+  }
+}
+
+TEST(EvaluateSegmentation, FoldersMatchedByTimestampWithMeanAndPooledScores) {
+  ff::testing::TempDir dir;
+  const auto gt_dir = dir.path() / "gt", est_dir = dir.path() / "est";
+  std::filesystem::create_directories(gt_dir);
+  std::filesystem::create_directories(est_dir);
+  // Frame 1: IoU 1/3 (as above). Frame 2: perfect 20 px. Frame 3: both empty (IoU 1).
+  // Estimated stamps are 5 ms off; a 4th estimated mask has no ground truth.
+  cv::imwrite((gt_dir / "100.000000.png").string(), rectMask(0, 0, 10, 10));
+  cv::imwrite((est_dir / "100.005000.png").string(), rectMask(5, 0, 10, 10));
+  cv::imwrite((gt_dir / "100.100000.png").string(), rectMask(20, 20, 4, 5));
+  cv::imwrite((est_dir / "100.105000.png").string(), rectMask(20, 20, 4, 5));
+  cv::imwrite((gt_dir / "100.200000.png").string(), rectMask(0, 0, 0, 0));
+  cv::imwrite((est_dir / "100.195000.png").string(), rectMask(0, 0, 0, 0));
+  cv::imwrite((est_dir / "105.000000.png").string(), rectMask(0, 0, 3, 3));
+  const auto r = evaluateSegmentation(gt_dir.string(), est_dir.string());
+  EXPECT_EQ(r.frames, 3u);
+  EXPECT_EQ(r.gt_unmatched, 0u);
+  EXPECT_EQ(r.est_unmatched, 1u);
+  EXPECT_NEAR(r.mean_iou, (1.0 / 3 + 1 + 1) / 3, 1e-12);
+  EXPECT_NEAR(r.mean_precision, (0.5 + 1 + 1) / 3, 1e-12);
+  EXPECT_NEAR(r.mean_recall, (0.5 + 1 + 1) / 3, 1e-12);
+  // Pooled: TP 50+20, FP 50, FN 50.
+  EXPECT_EQ(r.pooled.true_positive, 70);
+  EXPECT_NEAR(r.pooled.iou, 70.0 / 170.0, 1e-12);
+  EXPECT_NEAR(r.pooled.precision, 70.0 / 120.0, 1e-12);
+}
+
+TEST(EvaluateSegmentation, BadFoldersAreInputErrors) {
+  ff::testing::TempDir dir;
+  const auto gt_dir = dir.path() / "gt", est_dir = dir.path() / "est";
+  EXPECT_THROW(evaluateSegmentation(gt_dir.string(), est_dir.string()), InputError);  // missing
+  std::filesystem::create_directories(gt_dir);
+  std::filesystem::create_directories(est_dir);
+  EXPECT_THROW(evaluateSegmentation(gt_dir.string(), est_dir.string()), InputError);  // empty
+  cv::imwrite((gt_dir / "1.000000.png").string(), rectMask(0, 0, 5, 5));
+  cv::imwrite((est_dir / "2.000000.png").string(), rectMask(0, 0, 5, 5));
+  EXPECT_THROW(evaluateSegmentation(gt_dir.string(), est_dir.string()), InputError);  // no match in time
+  cv::imwrite((est_dir / "1.000000.png").string(), rectMask(0, 0, 5, 5, {20, 20}));
+  try {
+    evaluateSegmentation(gt_dir.string(), est_dir.string());
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("1.000000.png"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ff::eval
