@@ -1,0 +1,155 @@
+// Micro-benchmarks of optical flow, flow residuals, clustering and the score solve, with
+// accuracy counters measured on the analytic test scene (tests/flow/analytic_scene.h), whose
+// true flow is known: static pixels move by egoFlow() of the true depth and motion.
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score' \
+//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// Counters: epe_px = mean end-point error over static, unoccluded pixels that stay in view;
+// straddle = fraction of clusters with >= 10 % of their pixels on each side of the moving
+// box's outline; leak = fraction of box pixels in clusters that are < 90 % box.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+
+#include "../tests/flow/analytic_scene.h"
+#include "flowfusion/flow/flow_residual.h"
+#include "flowfusion/flow/optical_flow.h"
+#include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/dynamic_score.h"
+
+namespace {
+
+using ff::testing::AnalyticScene;
+
+struct FlowPair {
+  ff::testing::AnalyticView a, b;
+  cv::Mat gt;     // CV_32FC2 true flow
+  cv::Mat valid;  // CV_8U: unoccluded static pixels that stay in view
+};
+
+// A hand-held-like inter-frame motion at 30 Hz (TUM fr1 moves up to ~1.5 cm and ~1.5 deg).
+FlowPair makePair(int width, double scale_motion = 1.0) {
+  const auto scene = AnalyticScene::make(width, width * 3 / 4);
+  ff::Vector6d xi;
+  xi << 0.012, -0.006, 0.01, 0.012, -0.018, 0.006;
+  const ff::SE3 T_world_b = ff::expSE3(xi * scale_motion);
+  FlowPair p{scene.render(ff::SE3::Identity()), scene.render(T_world_b), {}, {}};
+  p.gt = ff::egoFlow(p.a.frame.depth, scene.camera, T_world_b.inverse());
+  p.valid = cv::Mat(p.gt.size(), CV_8U, cv::Scalar(0));
+  const ff::SE3 T_b_a = T_world_b.inverse();
+  for (int v = 0; v < p.gt.rows; ++v)
+    for (int u = 0; u < p.gt.cols; ++u) {
+      const cv::Vec2f f = p.gt.at<cv::Vec2f>(v, u);
+      const float ub = u + f[0], vb = v + f[1];
+      if (!std::isfinite(ub) || ub < 0 || vb < 0 || ub > p.gt.cols - 1 || vb > p.gt.rows - 1) continue;
+      const Eigen::Vector3d pb = T_b_a * scene.camera.backproject(u, v, p.a.frame.depth.at<float>(v, u));
+      const float zb = p.b.frame.depth.at<float>(static_cast<int>(std::lround(vb)), static_cast<int>(std::lround(ub)));
+      if (std::abs(zb - pb.z()) < 0.02 * pb.z()) p.valid.at<uchar>(v, u) = 255;
+    }
+  return p;
+}
+
+double meanEpe(const cv::Mat& uv, const FlowPair& p) {
+  double sum = 0;
+  int n = 0;
+  for (int v = 0; v < uv.rows; ++v)
+    for (int u = 0; u < uv.cols; ++u)
+      if (p.valid.at<uchar>(v, u)) {
+        const cv::Vec2f d = uv.at<cv::Vec2f>(v, u) - p.gt.at<cv::Vec2f>(v, u);
+        sum += std::hypot(d[0], d[1]);
+        ++n;
+      }
+  return sum / std::max(n, 1);
+}
+
+void runFlow(benchmark::State& state, const std::string& backend, const std::string& preset) {
+  const int width = static_cast<int>(state.range(0));
+  ff::FlowConfig c;
+  c.backend = backend;
+  c.dis_preset = preset;
+  c.downscale = static_cast<int>(state.range(1));
+  const FlowPair p = makePair(width);
+  auto flow = ff::makeOpticalFlow(c);
+  ff::FlowField f;
+  for (auto _ : state) {
+    f = flow->compute(p.a.frame.intensity, p.b.frame.intensity);
+    benchmark::DoNotOptimize(f.uv.data);
+  }
+  state.counters["epe_px"] = meanEpe(f.uv, p);
+  // Error in full-resolution (640x480) pixels, the unit alpha_F is tuned for.
+  state.counters["epe_640px"] = meanEpe(f.uv, p) * 640.0 / width;
+}
+
+void BM_FlowDisUltrafast(benchmark::State& s) { runFlow(s, "dis", "ultrafast"); }
+void BM_FlowDisFast(benchmark::State& s) { runFlow(s, "dis", "fast"); }
+void BM_FlowDisMedium(benchmark::State& s) { runFlow(s, "dis", "medium"); }
+void BM_FlowFarneback(benchmark::State& s) { runFlow(s, "farneback", "fast"); }
+// Args: image width (4:3), downscale.
+#define FLOW_ARGS ArgsProduct({{640, 320}, {1, 2, 4}})->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_FlowDisUltrafast)->FLOW_ARGS;
+BENCHMARK(BM_FlowDisFast)->FLOW_ARGS;
+BENCHMARK(BM_FlowDisMedium)->FLOW_ARGS;
+BENCHMARK(BM_FlowFarneback)->FLOW_ARGS;
+
+void BM_EgoFlowAndResidual(benchmark::State& state) {
+  const FlowPair p = makePair(static_cast<int>(state.range(0)));
+  const auto scene = AnalyticScene::make(p.gt.cols, p.gt.rows);
+  const ff::FlowField f{p.gt};
+  for (auto _ : state) {
+    const cv::Mat r = ff::flowResidual(f, ff::egoFlow(p.a.frame.depth, scene.camera, ff::SE3::Identity()));
+    benchmark::DoNotOptimize(r.data);
+  }
+}
+BENCHMARK(BM_EgoFlowAndResidual)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
+
+void runCluster(benchmark::State& state, const std::string& backend) {
+  const int width = static_cast<int>(state.range(0));
+  const auto scene = AnalyticScene::make(width, width * 3 / 4);
+  const auto view = scene.render(ff::SE3::Identity());
+  ff::ClusteringConfig c;
+  c.backend = backend;
+  auto clusterer = ff::makeClusterer(c);
+  ff::ClusterGraph g;
+  for (auto _ : state) {
+    g = clusterer->cluster(view.frame, scene.camera);
+    benchmark::DoNotOptimize(g.labels.data);
+  }
+  std::vector<int> inside(g.num_clusters, 0);
+  int box = 0;
+  for (int v = 0; v < g.labels.rows; ++v)
+    for (int u = 0; u < g.labels.cols; ++u)
+      if (view.mask.at<uchar>(v, u)) {
+        ++inside[g.labels.at<int>(v, u)];
+        ++box;
+      }
+  int straddle = 0, leaked = 0;
+  for (int i = 0; i < g.num_clusters; ++i) {
+    const double frac = static_cast<double>(inside[i]) / g.sizes[i];
+    straddle += frac >= 0.1 && frac <= 0.9;
+    if (frac < 0.9) leaked += inside[i];
+  }
+  state.counters["clusters"] = g.num_clusters;
+  state.counters["edges"] = static_cast<double>(g.edges.size());
+  state.counters["straddle"] = static_cast<double>(straddle) / std::max(g.num_clusters, 1);
+  state.counters["leak"] = static_cast<double>(leaked) / std::max(box, 1);
+}
+void BM_ClusterKMeans(benchmark::State& s) { runCluster(s, "kmeans"); }
+void BM_ClusterSupervoxel(benchmark::State& s) { runCluster(s, "supervoxel"); }
+BENCHMARK(BM_ClusterKMeans)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClusterSupervoxel)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
+
+void BM_ScoreSolve(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0.0, 0.4);
+  std::vector<double> delta(n);
+  for (auto& d : delta) d = U(rng);
+  std::vector<std::pair<int, int>> edges;
+  for (int i = 0; i < n; ++i)
+    for (int k = 1; k <= 3; ++k)
+      if (i + k < n) edges.emplace_back(i, i + k);
+  for (auto _ : state) benchmark::DoNotOptimize(ff::solveScoreEnergy(delta, edges, 0.1, 0.25, 1.0).data());
+}
+BENCHMARK(BM_ScoreSolve)->Arg(96)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

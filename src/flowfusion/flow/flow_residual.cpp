@@ -1,0 +1,61 @@
+#include "flowfusion/flow/flow_residual.h"
+
+#include <cmath>
+#include <limits>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE3& T_cam_b_cam_a) {
+  if (depth_a.empty() || depth_a.type() != CV_32FC1) throw InputError("egoFlow: expected a CV_32FC1 depth image");
+  if (camera.width != depth_a.cols || camera.height != depth_a.rows)
+    throw InputError("egoFlow: camera size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                     " does not match the depth image " + std::to_string(depth_a.cols) + "x" +
+                     std::to_string(depth_a.rows));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Eigen::Matrix3f R = T_cam_b_cam_a.rotation().cast<float>();
+  const Eigen::Vector3f t = T_cam_b_cam_a.translation().cast<float>();
+  const float fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+  cv::Mat flow(depth_a.size(), CV_32FC2);
+  cv::parallel_for_(cv::Range(0, depth_a.rows), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* d = depth_a.ptr<float>(v);
+      auto* out = flow.ptr<cv::Vec2f>(v);
+      // R * (ray * z) + t, with the ray's rotated part linear in u along the row.
+      const Eigen::Vector3f row_base = R * Eigen::Vector3f(-cx / fx, (v - cy) / fy, 1.f);
+      const Eigen::Vector3f du = R.col(0) / fx;
+      for (int u = 0; u < depth_a.cols; ++u) {
+        const float z = d[u];
+        if (!(z > 0.f) || !std::isfinite(z)) {
+          out[u] = {nan, nan};
+          continue;
+        }
+        const Eigen::Vector3f p = (row_base + du * static_cast<float>(u)) * z + t;
+        if (p.z() <= 1e-6f) {
+          out[u] = {nan, nan};
+          continue;
+        }
+        out[u] = {fx * p.x() / p.z() + cx - u, fy * p.y() / p.z() + cy - v};
+      }
+    }
+  });
+  return flow;
+}
+
+cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
+  if (flow.uv.empty() || flow.uv.type() != CV_32FC2) throw InputError("flowResidual: optical flow is not CV_32FC2");
+  if (ego_flow.empty() || ego_flow.type() != CV_32FC2) throw InputError("flowResidual: ego flow is not CV_32FC2");
+  const FlowField of = resizeFlow(flow, ego_flow.size());
+  cv::Mat r(ego_flow.size(), CV_32FC1);
+  for (int v = 0; v < r.rows; ++v) {
+    const auto* a = of.uv.ptr<cv::Vec2f>(v);
+    const auto* e = ego_flow.ptr<cv::Vec2f>(v);
+    float* o = r.ptr<float>(v);
+    // NaN propagates through the arithmetic, which is what marks invalid pixels.
+    for (int u = 0; u < r.cols; ++u) o[u] = std::hypot(a[u][0] - e[u][0], a[u][1] - e[u][1]);
+  }
+  return r;
+}
+
+}  // namespace ff

@@ -1,0 +1,24 @@
+#pragma once
+// Ego flow and flow residual (NOTES.md step 3, Eqs. 8-9).
+#include <opencv2/core.hpp>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/se3.h"
+#include "flowfusion/flow/optical_flow.h"
+
+namespace ff {
+
+// Ego flow dx_e = W(x, xi) - x (Eq. 8): where pixel x of A, back-projected with its depth,
+// lands in B after the camera motion T_cam_b_cam_a, minus x. CV_32FC2 in pixels; NaN where
+// the depth is invalid (<= 0 or not finite) or the point falls behind camera B. Points that
+// leave B's image keep their (finite) flow: the optical flow is extrapolated there too.
+// For a coarser result pass a downsampled depth (downsampleDepth) with camera.atLevel(l):
+// the camera's size must match depth_a's.
+cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE3& T_cam_b_cam_a);
+
+// Flow residual r_F = |dx_of - dx_e| (Eq. 9), CV_32F in pixels, NaN where either is invalid.
+// If the sizes differ, the optical flow is resampled to the ego flow's size (resizeFlow), so
+// a coarse ego flow gives a coarse residual in that level's pixels.
+cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
+
+}  // namespace ff

@@ -1,0 +1,149 @@
+#include "flowfusion/segmentation/dynamic_score.h"
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+namespace {
+
+// Data weight of a cluster with no valid residual: small enough that any neighbour decides,
+// non-zero so that an isolated cluster still has a unique solution (b = 0).
+constexpr double kNoEvidenceWeight = 1e-3;
+
+void checkThresholds(double theta_b, double theta_t) {
+  if (!(theta_t > theta_b) || !std::isfinite(theta_b) || !std::isfinite(theta_t))
+    throw InputError("scores: theta_t (" + std::to_string(theta_t) + ") must be greater than theta_b (" +
+                     std::to_string(theta_b) + ")");
+}
+
+void checkResidual(const cv::Mat& r, const cv::Mat& labels, const char* name) {
+  if (r.empty()) return;
+  if (r.type() != CV_32FC1) throw InputError(std::string("scores: residual ") + name + " is not CV_32FC1");
+  if (r.size() != labels.size())
+    throw InputError(std::string("scores: residual ") + name + " size differs from the cluster labels");
+}
+
+}  // namespace
+
+double scoreTarget(double delta, double theta_b, double theta_t) {
+  return std::clamp((delta - theta_b) / (theta_t - theta_b), 0.0, 1.0);
+}
+
+double scoreWeight(double delta, double theta_b, double theta_t) {
+  const double s = (delta - theta_b) / (theta_t - theta_b);
+  return std::sqrt(s * s + 1.0);
+}
+
+Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
+                                 double theta_b, double theta_t, double lambda_G) {
+  checkThresholds(theta_b, theta_t);
+  if (!(lambda_G >= 0) || !std::isfinite(lambda_G))
+    throw InputError("scores: lambda_G must be a finite value >= 0, got " + std::to_string(lambda_G));
+  const int n = static_cast<int>(delta.size());
+  if (n == 0) return {};
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(n + 4 * edges.size());
+  Eigen::VectorXd rhs(n);
+  for (int i = 0; i < n; ++i) {
+    const bool known = std::isfinite(delta[i]);
+    const double w = known ? scoreWeight(delta[i], theta_b, theta_t) : kNoEvidenceWeight;
+    const double g = known ? scoreTarget(delta[i], theta_b, theta_t) : 0.0;
+    triplets.emplace_back(i, i, w);
+    rhs[i] = w * g;
+  }
+  for (const auto& [i, j] : edges) {
+    if (i < 0 || j < 0 || i >= n || j >= n || i == j)
+      throw InputError("scores: edge (" + std::to_string(i) + ", " + std::to_string(j) + ") is invalid for " +
+                       std::to_string(n) + " clusters");
+    triplets.emplace_back(i, i, lambda_G);
+    triplets.emplace_back(j, j, lambda_G);
+    triplets.emplace_back(i, j, -lambda_G);
+    triplets.emplace_back(j, i, -lambda_G);
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  // W is positive on the diagonal and L is positive semi-definite, so A is SPD.
+  Eigen::VectorXd b = ldlt.solve(rhs);
+  return b.cwiseMax(0.0).cwiseMin(1.0);
+}
+
+DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
+                                   const ScoreConfig& config) {
+  checkThresholds(config.theta_b, config.theta_t);
+  const cv::Mat& labels = graph.labels;
+  if (labels.type() != CV_32SC1) throw InputError("scores: cluster labels are not CV_32SC1");
+  checkResidual(residuals.r_I, labels, "r_I");
+  checkResidual(residuals.r_D, labels, "r_D");
+  checkResidual(residuals.r_F, labels, "r_F");
+  const int n = graph.num_clusters;
+  if (static_cast<int>(graph.mean_depth.size()) != n)
+    throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
+                     std::to_string(n) + " clusters");
+
+  // Per cluster and term: sum and count of valid pixels.
+  std::vector<double> sum(3 * n, 0.0);
+  std::vector<int> cnt(3 * n, 0);
+  const cv::Mat* terms[3] = {&residuals.r_I, &residuals.r_D, &residuals.r_F};
+  for (int v = 0; v < labels.rows; ++v) {
+    const int* l = labels.ptr<int>(v);
+    for (int k = 0; k < 3; ++k) {
+      if (terms[k]->empty()) continue;
+      const float* r = terms[k]->ptr<float>(v);
+      for (int u = 0; u < labels.cols; ++u) {
+        const int c = l[u];
+        if (c < 0 || !std::isfinite(r[u])) continue;
+        if (c >= n) throw InputError("scores: label " + std::to_string(c) + " out of range");
+        sum[3 * c + k] += std::abs(r[u]);
+        ++cnt[3 * c + k];
+      }
+    }
+  }
+  DynamicScores out;
+  out.delta.resize(n);
+  std::vector<double> delta(n);
+  for (int c = 0; c < n; ++c) {
+    const double D = graph.mean_depth[c];
+    const double scale[3] = {config.alpha_I, D > 0 ? 1.0 / D : 0.0, config.alpha_F};
+    double d = 0;
+    bool any = false;
+    for (int k = 0; k < 3; ++k) {
+      if (cnt[3 * c + k] == 0) continue;
+      d += scale[k] * sum[3 * c + k] / cnt[3 * c + k];
+      any = true;
+    }
+    delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
+    out.delta[c] = static_cast<float>(delta[c]);
+  }
+  const Eigen::VectorXd b = solveScoreEnergy(delta, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+  out.b.assign(b.data(), b.data() + b.size());
+  return out;
+}
+
+cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores) {
+  if (static_cast<int>(scores.b.size()) != graph.num_clusters)
+    throw InputError("pixelScores: " + std::to_string(scores.b.size()) + " scores for " +
+                     std::to_string(graph.num_clusters) + " clusters");
+  cv::Mat out(graph.labels.size(), CV_32FC1);
+  for (int v = 0; v < out.rows; ++v) {
+    const int* l = graph.labels.ptr<int>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < out.cols; ++u) o[u] = (l[u] >= 0 && l[u] < graph.num_clusters) ? scores.b[l[u]] : 0.f;
+  }
+  return out;
+}
+
+cv::Mat dynamicMask(const cv::Mat& pixel_scores, float threshold) {
+  if (pixel_scores.type() != CV_32FC1) throw InputError("dynamicMask: pixel scores are not CV_32FC1");
+  cv::Mat mask;
+  cv::compare(pixel_scores, threshold, mask, cv::CMP_GT);
+  return mask;
+}
+
+}  // namespace ff

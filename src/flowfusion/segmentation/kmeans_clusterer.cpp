@@ -1,0 +1,171 @@
+// k-means on back-projected 3D points (as StaticFusion / Joint-VO-SF), computed on a
+// subsampled pixel grid and propagated to full resolution by a nearest-centroid test among
+// the clusters of the neighbouring grid points, which keeps boundaries pixel-accurate at depth
+// discontinuities.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/segmentation/cluster_graph_builder.h"
+
+namespace ff {
+
+namespace {
+
+class KMeansClusterer : public Clusterer {
+ public:
+  explicit KMeansClusterer(const ClusteringConfig& c) : config_(c) {}
+
+  std::string name() const override { return "kmeans"; }
+
+  ClusterGraph cluster(const RgbdFrame& frame, const CameraIntrinsics& camera) override {
+    detail::checkClusterInput(frame, camera, "kmeans clustering");
+    const cv::Mat& depth = frame.depth;
+    const int s = config_.kmeans_subsample;
+    const int gw = (depth.cols + s - 1) / s, gh = (depth.rows + s - 1) / s;
+
+    // Grid points: the pixel at the centre of each s x s cell (or -1 without depth).
+    std::vector<Eigen::Vector3f> pts;
+    cv::Mat grid_idx(gh, gw, CV_32S, cv::Scalar(-1));
+    for (int gv = 0; gv < gh; ++gv)
+      for (int gu = 0; gu < gw; ++gu) {
+        const int u = std::min(gu * s + s / 2, depth.cols - 1), v = std::min(gv * s + s / 2, depth.rows - 1);
+        const float z = depth.at<float>(v, u);
+        if (!detail::validDepth(z)) continue;
+        grid_idx.at<int>(gv, gu) = static_cast<int>(pts.size());
+        pts.push_back(camera.backproject(u, v, z).cast<float>());
+      }
+
+    cv::Mat labels(depth.size(), CV_32S, cv::Scalar(-1));
+    int num_labels = 0;
+    if (!pts.empty()) {
+      const std::vector<Eigen::Vector3f> centres = kmeans(pts, grid_idx);
+      num_labels = static_cast<int>(centres.size());
+      cv::Mat grid_label(gh, gw, CV_32S, cv::Scalar(-1));
+      for (int gv = 0; gv < gh; ++gv)
+        for (int gu = 0; gu < gw; ++gu) {
+          const int i = grid_idx.at<int>(gv, gu);
+          if (i >= 0) grid_label.at<int>(gv, gu) = nearest(pts[i], centres, nullptr, 0);
+        }
+      propagate(depth, camera, centres, grid_label, labels);
+    }
+    detail::fillUnlabeled(labels, depth, config_.adjacency_max_rel_depth_jump, num_labels);
+    return detail::buildClusterGraph(labels, num_labels, depth, camera, config_.adjacency_max_rel_depth_jump,
+                                     config_.adjacency_min_contacts);
+  }
+
+ private:
+  static int nearest(const Eigen::Vector3f& p, const std::vector<Eigen::Vector3f>& centres, const int* cand,
+                     int ncand) {
+    int best = -1;
+    float best_d = std::numeric_limits<float>::max();
+    const int n = cand ? ncand : static_cast<int>(centres.size());
+    for (int k = 0; k < n; ++k) {
+      const int c = cand ? cand[k] : k;
+      const float d = (centres[c] - p).squaredNorm();
+      if (d < best_d) {
+        best_d = d;
+        best = c;
+      }
+    }
+    return best;
+  }
+
+  // Lloyd's algorithm seeded on a regular image grid of about kmeans_clusters cells; empty
+  // clusters are dropped.
+  std::vector<Eigen::Vector3f> kmeans(const std::vector<Eigen::Vector3f>& pts, const cv::Mat& grid_idx) const {
+    const int gw = grid_idx.cols, gh = grid_idx.rows;
+    const double aspect = static_cast<double>(gw) / gh;
+    const int kx = std::max(1, static_cast<int>(std::lround(std::sqrt(config_.kmeans_clusters * aspect))));
+    const int ky = std::max(1, static_cast<int>(std::lround(static_cast<double>(config_.kmeans_clusters) / kx)));
+    std::vector<Eigen::Vector3f> centres;
+    for (int j = 0; j < ky; ++j)
+      for (int i = 0; i < kx; ++i) {
+        // First valid grid point found spiralling out from the cell centre, within the cell.
+        const int u0 = i * gw / kx, u1 = (i + 1) * gw / kx, v0 = j * gh / ky, v1 = (j + 1) * gh / ky;
+        const int cu = (u0 + u1) / 2, cv_ = (v0 + v1) / 2;
+        int found = -1;
+        for (int r = 0; found < 0 && r <= std::max(u1 - u0, v1 - v0); ++r)
+          for (int dv = -r; found < 0 && dv <= r; ++dv)
+            for (int du = -r; du <= r; ++du) {
+              const int u = cu + du, v = cv_ + dv;
+              if (u < u0 || u >= u1 || v < v0 || v >= v1) continue;
+              if (grid_idx.at<int>(v, u) >= 0) {
+                found = grid_idx.at<int>(v, u);
+                break;
+              }
+            }
+        if (found >= 0) centres.push_back(pts[found]);
+      }
+    if (centres.empty()) centres.push_back(pts[0]);
+    std::vector<int> assign(pts.size(), -1);
+    for (int it = 0; it < config_.kmeans_iterations; ++it) {
+      bool changed = false;
+      for (size_t p = 0; p < pts.size(); ++p) {
+        const int c = nearest(pts[p], centres, nullptr, 0);
+        changed |= c != assign[p];
+        assign[p] = c;
+      }
+      std::vector<Eigen::Vector3f> sum(centres.size(), Eigen::Vector3f::Zero());
+      std::vector<int> cnt(centres.size(), 0);
+      for (size_t p = 0; p < pts.size(); ++p) {
+        sum[assign[p]] += pts[p];
+        ++cnt[assign[p]];
+      }
+      std::vector<Eigen::Vector3f> next;
+      for (size_t c = 0; c < centres.size(); ++c)
+        if (cnt[c] > 0) next.push_back(sum[c] / cnt[c]);
+      if (next.size() != centres.size()) changed = true;
+      centres = std::move(next);
+      if (!changed) break;
+    }
+    return centres;
+  }
+
+  void propagate(const cv::Mat& depth, const CameraIntrinsics& camera, const std::vector<Eigen::Vector3f>& centres,
+                 const cv::Mat& grid_label, cv::Mat& labels) const {
+    const int s = config_.kmeans_subsample;
+    const float fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+    cv::parallel_for_(cv::Range(0, depth.rows), [&](const cv::Range& rows) {
+      for (int v = rows.start; v < rows.end; ++v) {
+        const float* z = depth.ptr<float>(v);
+        int* l = labels.ptr<int>(v);
+        const int gv = v / s;
+        int cand[9];
+        int last_gu = -1, ncand = 0;
+        for (int u = 0; u < depth.cols; ++u) {
+          if (!detail::validDepth(z[u])) continue;
+          const int gu = u / s;
+          if (gu != last_gu) {
+            last_gu = gu;
+            ncand = 0;
+            for (int dv = -1; dv <= 1; ++dv)
+              for (int du = -1; du <= 1; ++du) {
+                const int a = gu + du, b = gv + dv;
+                if (a < 0 || b < 0 || a >= grid_label.cols || b >= grid_label.rows) continue;
+                const int c = grid_label.at<int>(b, a);
+                if (c >= 0 && std::find(cand, cand + ncand, c) == cand + ncand) cand[ncand++] = c;
+              }
+          }
+          if (ncand == 0) continue;
+          const Eigen::Vector3f p((u - cx) * z[u] / fx, (v - cy) * z[u] / fy, z[u]);
+          l[u] = nearest(p, centres, cand, ncand);
+        }
+      }
+    });
+  }
+
+  ClusteringConfig config_;
+};
+
+}  // namespace
+
+std::unique_ptr<Clusterer> makeKMeansClusterer(const ClusteringConfig& config) {
+  if (config.kmeans_clusters < 1) throw InputError("clustering.kmeans_clusters must be >= 1");
+  if (config.kmeans_subsample < 1) throw InputError("clustering.kmeans_subsample must be >= 1");
+  if (config.kmeans_iterations < 0) throw InputError("clustering.kmeans_iterations must be >= 0");
+  return std::make_unique<KMeansClusterer>(config);
+}
+
+}  // namespace ff

@@ -1,0 +1,156 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "analytic_scene.h"
+#include "flowfusion/core/error.h"
+#include "flowfusion/core/image_pyramid.h"
+#include "flowfusion/flow/flow_residual.h"
+#include "flowfusion/flow/optical_flow.h"
+
+namespace ff {
+namespace {
+
+using testing::AnalyticScene;
+
+double medianOf(std::vector<float> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Finite residual values where mask (if given) equals want.
+std::vector<float> valuesWhere(const cv::Mat& r, const cv::Mat& mask, uchar want, int border = 0) {
+  std::vector<float> out;
+  for (int v = border; v < r.rows - border; ++v)
+    for (int u = border; u < r.cols - border; ++u)
+      if (std::isfinite(r.at<float>(v, u)) && (mask.empty() || mask.at<uchar>(v, u) == want))
+        out.push_back(r.at<float>(v, u));
+  return out;
+}
+
+SE3 cameraMotion() {
+  Vector6d xi;
+  xi << 0.03, -0.01, 0.02, 0.01, -0.015, 0.005;  // m, rad
+  return expSE3(xi);
+}
+
+TEST(OpticalFlowFactory, UnknownNamesAreInputErrors) {
+  FlowConfig c;
+  c.backend = "pwcnet";
+  try {
+    makeOpticalFlow(c);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("dis"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("farneback"), std::string::npos) << e.what();
+  }
+  c = FlowConfig{};
+  c.dis_preset = "slow";
+  EXPECT_THROW(makeOpticalFlow(c), InputError);
+  c = FlowConfig{};
+  c.downscale = 3;
+  EXPECT_THROW(makeOpticalFlow(c), InputError);
+}
+
+TEST(OpticalFlowFactory, ConfigRoundTripsThroughJson) {
+  FlowConfig c;
+  c.backend = "farneback";
+  c.downscale = 4;
+  const FlowConfig back = nlohmann::json(c).get<FlowConfig>();
+  EXPECT_EQ(back.backend, "farneback");
+  EXPECT_EQ(back.downscale, 4);
+  EXPECT_EQ(back.dis_preset, FlowConfig{}.dis_preset);
+}
+
+TEST(OpticalFlow, RejectsMismatchedInputs) {
+  auto flow = makeOpticalFlow(FlowConfig{});
+  EXPECT_THROW(flow->compute(cv::Mat(), cv::Mat()), InputError);
+  EXPECT_THROW(flow->compute(cv::Mat::zeros(60, 80, CV_32F), cv::Mat::zeros(60, 81, CV_32F)), InputError);
+  EXPECT_THROW(flow->compute(cv::Mat::zeros(60, 80, CV_8U), cv::Mat::zeros(60, 80, CV_8U)), InputError);
+}
+
+TEST(EgoFlow, MatchesAnalyticTranslationAndMarksInvalid) {
+  const CameraIntrinsics cam{100, 100, 40, 30, 80, 60};
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.0f));
+  depth.at<float>(10, 10) = 0.f;
+  depth.at<float>(11, 11) = std::nanf("");
+  SE3 T_b_a = SE3::Identity();
+  T_b_a.translation() = Eigen::Vector3d(0.1, -0.05, 0);  // points move +x, -y in B's frame
+  const cv::Mat e = egoFlow(depth, cam, T_b_a);
+  ASSERT_EQ(e.type(), CV_32FC2);
+  EXPECT_NEAR(e.at<cv::Vec2f>(30, 40)[0], 100 * 0.1 / 2.0, 1e-4);
+  EXPECT_NEAR(e.at<cv::Vec2f>(5, 70)[1], 100 * -0.05 / 2.0, 1e-4);
+  EXPECT_TRUE(std::isnan(e.at<cv::Vec2f>(10, 10)[0]));
+  EXPECT_TRUE(std::isnan(e.at<cv::Vec2f>(11, 11)[1]));
+
+  SE3 behind = SE3::Identity();
+  behind.translation() = Eigen::Vector3d(0, 0, -3.0);  // every point ends behind camera B
+  const cv::Mat eb = egoFlow(depth, cam, behind);
+  EXPECT_TRUE(std::isnan(eb.at<cv::Vec2f>(30, 40)[0]));
+
+  EXPECT_THROW(egoFlow(depth, CameraIntrinsics{100, 100, 40, 30, 160, 120}, T_b_a), InputError);
+}
+
+TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
+  const CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.0f));
+  depth.at<float>(20, 20) = 0.f;
+  SE3 T_b_a = SE3::Identity();
+  T_b_a.translation() = Eigen::Vector3d(0.04, 0, 0);
+  const cv::Mat e = egoFlow(depth, cam, T_b_a);
+  FlowField of{e.clone()};
+  of.uv.at<cv::Vec2f>(20, 20) = {1, 1};
+  const cv::Mat r = flowResidual(of, e);
+  EXPECT_TRUE(std::isnan(r.at<float>(20, 20)));
+  EXPECT_NEAR(r.at<float>(30, 30), 0.f, 1e-6);
+
+  // Half resolution: the full-resolution flow is resampled and rescaled to level-1 pixels.
+  const cv::Mat e1 = egoFlow(downsampleDepth(depth), cam.atLevel(1), T_b_a);
+  const cv::Mat r1 = flowResidual(FlowField{e.clone()}, e1);
+  ASSERT_EQ(r1.size(), cv::Size(40, 30));
+  EXPECT_LT(medianOf(valuesWhere(r1, cv::Mat(), 0, 2)), 1e-3);
+}
+
+class FlowOnAnalyticScene : public ::testing::Test {
+ protected:
+  AnalyticScene scene = AnalyticScene::make(320, 240);
+};
+
+TEST_F(FlowOnAnalyticScene, StaticSceneGivesNearZeroResidualWithTrueMotion) {
+  const SE3 T_world_b = cameraMotion();
+  const auto a = scene.render(SE3::Identity());
+  const auto b = scene.render(T_world_b);
+  // Full resolution here = the default half-resolution flow of a 640x480 frame.
+  FlowConfig c;
+  c.downscale = 1;
+  const FlowField of = makeOpticalFlow(c)->compute(a.frame.intensity, b.frame.intensity);
+  ASSERT_EQ(of.uv.size(), a.frame.depth.size());
+  const cv::Mat r = flowResidual(of, egoFlow(a.frame.depth, scene.camera, T_world_b.inverse()));
+  // Borders (pixels leaving the image) and the box's disoccluded outline are a small minority.
+  const double med = medianOf(valuesWhere(r, cv::Mat(), 0, 8));
+  EXPECT_LT(med, 0.3) << "median flow residual " << med << " px";
+}
+
+TEST_F(FlowOnAnalyticScene, MovingObjectGivesLargeResidualOnItsPixels) {
+  const SE3 T_world_b = cameraMotion();
+  const auto a = scene.render(SE3::Identity());
+  const auto b = scene.render(T_world_b, Eigen::Vector3d(0.07, 0.0, 0.0));  // ~12 px at 320x240
+  for (const std::string backend : {"dis", "farneback"}) {
+    FlowConfig c;
+    c.backend = backend;
+    const FlowField of = makeOpticalFlow(c)->compute(a.frame.intensity, b.frame.intensity);
+    const cv::Mat r = flowResidual(of, egoFlow(a.frame.depth, scene.camera, T_world_b.inverse()));
+    cv::Mat inner;  // box pixels away from its outline, where flow is unambiguous
+    cv::erode(a.mask, inner, cv::Mat::ones(9, 9, CV_8U));
+    const double on_box = medianOf(valuesWhere(r, inner, 255));
+    const double background = medianOf(valuesWhere(r, a.mask, 0, 8));
+    EXPECT_GT(on_box, 6.0) << backend;
+    EXPECT_LT(background, 0.6) << backend;
+  }
+}
+
+}  // namespace
+}  // namespace ff

@@ -1,0 +1,164 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <random>
+
+#include "../flow/analytic_scene.h"
+#include "flowfusion/core/error.h"
+#include "flowfusion/segmentation/dynamic_score.h"
+
+namespace ff {
+namespace {
+
+TEST(ScoreFunctions, TargetAndWeightAtAndBetweenThresholds) {
+  const double tb = 0.1, tt = 0.3;
+  EXPECT_DOUBLE_EQ(scoreTarget(0.0, tb, tt), 0.0);
+  EXPECT_DOUBLE_EQ(scoreTarget(tb, tb, tt), 0.0);
+  EXPECT_NEAR(scoreTarget(0.15, tb, tt), 0.25, 1e-12);
+  EXPECT_NEAR(scoreTarget(0.2, tb, tt), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(scoreTarget(tt, tb, tt), 1.0);
+  EXPECT_DOUBLE_EQ(scoreTarget(5.0, tb, tt), 1.0);
+  EXPECT_DOUBLE_EQ(scoreWeight(tb, tb, tt), 1.0);
+  EXPECT_NEAR(scoreWeight(tt, tb, tt), std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(scoreWeight(0.2, tb, tt), std::sqrt(1.25), 1e-12);
+  EXPECT_NEAR(scoreWeight(0.0, tb, tt), std::sqrt(1.25), 1e-12);  // symmetric about theta_b
+}
+
+// E(b) written out term by term, independently of the solver's matrix assembly.
+double energy(const Eigen::VectorXd& b, const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
+              double tb, double tt, double lambda) {
+  double e = 0;
+  for (size_t i = 0; i < delta.size(); ++i) {
+    const double g = std::clamp((delta[i] - tb) / (tt - tb), 0.0, 1.0);
+    const double s = (delta[i] - tb) / (tt - tb);
+    e += std::sqrt(s * s + 1) * std::pow(b[i] - g, 2);
+  }
+  for (const auto& [i, j] : edges) e += lambda * std::pow(b[i] - b[j], 2);
+  return e;
+}
+
+TEST(ScoreEnergy, MatchesDenseReferenceSolve) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0.0, 0.5);
+  const int n = 9;
+  std::vector<double> delta(n);
+  for (auto& d : delta) d = U(rng);
+  const std::vector<std::pair<int, int>> edges = {{0, 1}, {1, 2}, {2, 3}, {0, 3}, {3, 4}, {5, 6}, {6, 7}, {4, 7}, {2, 6}};
+  const double tb = 0.12, tt = 0.3;
+  for (const double lambda : {0.0, 0.5, 1.0, 4.0}) {
+    // E = b^T A b - 2 c^T b + k; recover A and c from energy values at 0, e_i and e_i + e_j.
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+    const double e0 = energy(zero, delta, edges, tb, tt, lambda);
+    Eigen::MatrixXd A(n, n);
+    Eigen::VectorXd c(n), ei_e(n);
+    for (int i = 0; i < n; ++i) ei_e[i] = energy(Eigen::VectorXd::Unit(n, i), delta, edges, tb, tt, lambda);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        if (i == j) continue;
+        const double eij = energy(Eigen::VectorXd::Unit(n, i) + Eigen::VectorXd::Unit(n, j), delta, edges, tb, tt, lambda);
+        A(i, j) = 0.5 * (eij - ei_e[i] - ei_e[j] + e0);
+      }
+    for (int i = 0; i < n; ++i) {
+      const double e2 = energy(2 * Eigen::VectorXd::Unit(n, i), delta, edges, tb, tt, lambda);
+      A(i, i) = 0.5 * (e2 - 2 * ei_e[i] + e0);
+      c[i] = -0.5 * (ei_e[i] - e0 - A(i, i));
+    }
+    const Eigen::VectorXd ref = A.ldlt().solve(c).cwiseMax(0.0).cwiseMin(1.0);
+    const Eigen::VectorXd b = solveScoreEnergy(delta, edges, tb, tt, lambda);
+    ASSERT_EQ(b.size(), n);
+    EXPECT_LT((b - ref).cwiseAbs().maxCoeff(), 1e-9) << "lambda " << lambda;
+    // And it is a minimum: no coordinate step lowers E.
+    for (int i = 0; i < n; ++i)
+      for (const double step : {-1e-3, 1e-3}) {
+        Eigen::VectorXd p = b;
+        p[i] += step;
+        EXPECT_GE(energy(p, delta, edges, tb, tt, lambda), energy(b, delta, edges, tb, tt, lambda) - 1e-12);
+      }
+  }
+}
+
+TEST(ScoreEnergy, NoEvidenceFollowsNeighboursAndBadInputThrows) {
+  const double nan = std::nan("");
+  const Eigen::VectorXd b = solveScoreEnergy({1.0, nan, 1.0, nan}, {{0, 1}, {1, 2}}, 0.1, 0.3, 1.0);
+  EXPECT_NEAR(b[1], 1.0, 1e-3);
+  EXPECT_NEAR(b[3], 0.0, 1e-12);  // isolated, no evidence: static
+  EXPECT_THROW(solveScoreEnergy({0.1, 0.2}, {{0, 2}}, 0.1, 0.3, 1.0), InputError);
+  EXPECT_THROW(solveScoreEnergy({0.1, 0.2}, {{0, 1}}, 0.3, 0.1, 1.0), InputError);
+  EXPECT_THROW(solveScoreEnergy({0.1, 0.2}, {{0, 1}}, 0.1, 0.3, -1.0), InputError);
+  EXPECT_EQ(solveScoreEnergy({}, {}, 0.1, 0.3, 1.0).size(), 0);
+}
+
+TEST(DynamicScores, DeltaIsTheSizeNormalisedWeightedResidual) {
+  ClusterGraph g;
+  g.labels = cv::Mat(2, 4, CV_32S);
+  g.labels.setTo(0);
+  g.labels(cv::Rect(2, 0, 2, 2)).setTo(1);
+  g.labels.at<int>(0, 0) = -1;
+  g.num_clusters = 2;
+  g.sizes = {3, 4};
+  g.mean_depth = {2.0f, 1.0f};
+  g.centroids.resize(2);
+  ResidualImages r;
+  r.r_I = cv::Mat(2, 4, CV_32F, cv::Scalar(0.1f));
+  r.r_D = cv::Mat(2, 4, CV_32F, cv::Scalar(0.2f));
+  r.r_F = cv::Mat(2, 4, CV_32F, cv::Scalar(2.0f));
+  r.r_F.at<float>(1, 1) = std::nanf("");  // skipped: cluster 0's r_F mean is over 2 pixels
+  r.r_F.at<float>(0, 1) = 4.0f;
+  r.r_I.at<float>(1, 3) = -0.5f;  // absolute values
+  ScoreConfig cfg;
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  ASSERT_EQ(s.delta.size(), 2u);
+  EXPECT_NEAR(s.delta[0], 0.9 * 0.1 + 0.2 / 2.0 + 0.022 * 3.0, 1e-6);
+  EXPECT_NEAR(s.delta[1], 0.9 * 0.2 + 0.2 / 1.0 + 0.022 * 2.0, 1e-6);
+
+  ResidualImages only_flow;
+  only_flow.r_F = r.r_F;
+  EXPECT_NEAR(computeDynamicScores(g, only_flow, cfg).delta[1], 0.022 * 2.0, 1e-6);
+  ResidualImages wrong;
+  wrong.r_F = cv::Mat(3, 4, CV_32F, cv::Scalar(0));
+  EXPECT_THROW(computeDynamicScores(g, wrong, cfg), InputError);
+}
+
+TEST(DynamicScores, ObjectClustersScoreHighAndBackgroundLow) {
+  const auto scene = testing::AnalyticScene::make(160, 120);
+  const auto view = scene.render(SE3::Identity());
+  const ClusterGraph g = makeClusterer(ClusteringConfig{})->cluster(view.frame, scene.camera);
+  // Residuals as on a moving object (~10 px flow residual, brightness and depth change) and on a
+  // well-tracked static background, with noise and invalid pixels.
+  cv::Mat noise(view.mask.size(), CV_32F);
+  cv::randn(noise, 0, 1);
+  ResidualImages r;
+  const cv::Mat on = view.mask > 0;
+  r.r_F = cv::Mat(view.mask.size(), CV_32F, cv::Scalar(0.4f)) + 0.3 * cv::abs(noise);
+  r.r_F.setTo(12.0f, on);
+  r.r_I = cv::Mat(view.mask.size(), CV_32F, cv::Scalar(0.02f));
+  r.r_I.setTo(0.12f, on);
+  r.r_D = cv::Mat(view.mask.size(), CV_32F, cv::Scalar(0.01f));
+  r.r_D.setTo(0.15f, on);
+  r.r_D(cv::Rect(0, 0, 160, 20)).setTo(std::nanf(""));
+  const DynamicScores s = computeDynamicScores(g, r, ScoreConfig{});
+  const cv::Mat b = pixelScores(g, s);
+  const cv::Mat mask = dynamicMask(b);
+  ASSERT_EQ(mask.type(), CV_8UC1);
+  int box = 0, box_hit = 0, bg = 0, bg_hit = 0;
+  for (int v = 0; v < 120; ++v)
+    for (int u = 0; u < 160; ++u) {
+      if (view.mask.at<uchar>(v, u)) {
+        ++box;
+        box_hit += mask.at<uchar>(v, u) == 255;
+      } else {
+        ++bg;
+        bg_hit += mask.at<uchar>(v, u) == 255;
+      }
+    }
+  EXPECT_GT(box_hit, 0.9 * box);
+  EXPECT_LT(bg_hit, 0.05 * bg);
+  for (int c = 0; c < g.num_clusters; ++c) {
+    EXPECT_GE(s.b[c], 0.f);
+    EXPECT_LE(s.b[c], 1.f);
+  }
+}
+
+}  // namespace
+}  // namespace ff
