@@ -21,12 +21,13 @@ struct RoomFixture {
   Eigen::Vector3d room_max{2.0, 1.5, 4.0};
   bool with_sphere = false;
   double sphere_radius_m = 0.3;
-  Eigen::Vector3d sphere_start{-0.9, 0.2, 2.0};
-  Eigen::Vector3d sphere_end{0.9, 0.2, 2.0};
+  Eigen::Vector3d sphere_start{-0.6, 0.2, 2.0};
+  Eigen::Vector3d sphere_end{0.6, 0.2, 2.0};
   int frames = 40;
   CameraIntrinsics camera{262.0, 262.0, 159.5, 119.5, 320, 240};
 
-  // A gentle hand-held-like path looking down +z.
+  // A gentle hand-held-like path looking down +z; the sphere stays in view (free space can only be
+  // observed where the camera looks).
   SE3 pose(int i) const {
     const double s = static_cast<double>(i) / std::max(1, frames - 1);
     SE3 T = SE3::Identity();

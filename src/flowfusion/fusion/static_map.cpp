@@ -106,8 +106,8 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
                            static_cast<float>((y - camera.cy) / camera.fy) * z, z);
   };
 
-  // 1. Measurements at the fused resolution; grid_depth (all valid depths, whatever their
-  // weight) is the free-space evidence.
+  // 1. Measurements at the fused resolution; grid_depth (every measured depth, whatever its
+  // weight, also beyond max_depth_m: the ray still crossed free space) is the free-space evidence.
   std::vector<Measurement> meas(static_cast<size_t>(gw) * gh);
   std::vector<float> grid_depth(meas.size(), 0.0f);
   tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
@@ -115,8 +115,9 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
       const int y = j * stride;
       for (int i = 0; i < gw; ++i) {
         const int x = i * stride;
+        const float raw = depth.at<float>(y, x);
+        grid_depth[j * gw + i] = raw > 0 && std::isfinite(raw) ? raw : 0.0f;
         const float z = validDepth(x, y);
-        grid_depth[j * gw + i] = z;
         if (z == 0) continue;
         const float w = static_weight.empty() ? 1.0f : static_weight.at<float>(y, x);
         if (!(w >= min_weight)) continue;
@@ -218,7 +219,7 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
             if (nkey == kEmpty) continue;
             const Surfel& s = surfels_[keyIndex(nkey)];
             const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-            covered = (pc - m.point).norm() < std::max(s.radius, tolerance);
+            covered = (pc - m.point).norm() < s.radius;
           }
         if (!covered) action[j * gw + i] = Action::kAdd;
       }
