@@ -32,13 +32,15 @@ TEST(TextTable, AlignsNumbersRightAndTextLeft) {
   t.addRow({"rgbd", TextTable::num(0.0325, 4)});
   t.addRow({"flowfusion", TextTable::num(12.5, 1)});
   t.addRow({"none", TextTable::num(NAN)});
-  // Header cells are left-aligned; no line has trailing blanks.
+  t.addRow({"peer"});  // padded with an empty cell
+  // The numeric column's header is right-aligned; no line has trailing blanks.
   EXPECT_EQ(t.str(),
-            "method      ATE m\n"
+            "method       ATE m\n"
             "------------------\n"
             "rgbd        0.0325\n"
             "flowfusion    12.5\n"
-            "none             -\n");
+            "none             -\n"
+            "peer\n");
   EXPECT_THROW(t.addRow({"a", "b", "c"}), std::invalid_argument);
 }
 

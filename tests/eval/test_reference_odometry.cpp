@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "flowfusion/core/error.h"
 #include "flowfusion/eval/reference_odometry.h"
 #include "flowfusion/eval/trajectory_metrics.h"
@@ -50,6 +52,34 @@ TEST_P(ReferenceOdometryOnFr1Xyz, FollowsTheGroundTruthMotion) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, ReferenceOdometryOnFr1Xyz, ::testing::Values("rgbd", "icp"));
+
+// A textured fronto-parallel wall 1.5 m away, seen by a 160x120 camera.
+RgbdFrame wallFrame(double t, double shift_px, bool with_depth) {
+  RgbdFrame f;
+  f.timestamp = t;
+  f.name = "wall";
+  f.intensity.create(120, 160, CV_32FC1);
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 160; ++x)
+      f.intensity.at<float>(y, x) =
+          0.5f + 0.25f * std::sin(0.3 * (x + shift_px)) * std::cos(0.23 * y) + 0.1f * std::sin(0.05 * x * y);
+  f.depth = cv::Mat(120, 160, CV_32FC1, cv::Scalar(with_depth ? 1.5 : 0.0));
+  return f;
+}
+
+TEST(ReferenceOdometry, FailedFrameRepeatsThePreviousMotion) {
+  const CameraIntrinsics camera{130, 130, 79.5, 59.5, 160, 120};
+  ReferenceOdometry odometry("rgbd", camera);
+  odometry.track(wallFrame(0.0, 0, true));
+  odometry.track(wallFrame(0.1, 0, true));
+  odometry.track(wallFrame(0.2, 0, false));  // no depth: nothing to align
+  EXPECT_EQ(odometry.failures(), 1);
+  ASSERT_EQ(odometry.trajectory().size(), 3u);
+  const SE3 T_1_2 = odometry.trajectory()[1].T_world_cam.inverse() * odometry.trajectory()[2].T_world_cam;
+  const SE3 T_0_1 = odometry.trajectory()[0].T_world_cam.inverse() * odometry.trajectory()[1].T_world_cam;
+  EXPECT_TRUE(T_1_2.isApprox(T_0_1, 1e-12));
+  EXPECT_EQ(odometry.callMs().size(), 2u);
+}
 
 }  // namespace
 }  // namespace ff::eval

@@ -75,18 +75,22 @@ std::string TextTable::str() const {
     width[c] = headers_[c].size();
     for (const auto& r : rows_) width[c] = std::max(width[c], r[c].size());
   }
+  // A header sits over its column's numbers: right-aligned when every cell below reads as one.
+  std::vector<char> numeric_column(headers_.size(), !rows_.empty());
+  for (const auto& r : rows_)
+    for (size_t c = 0; c < r.size(); ++c)
+      if (!r[c].empty() && !looksNumeric(r[c])) numeric_column[c] = 0;
   std::ostringstream out;
   const auto emit = [&](const std::vector<std::string>& cells, bool header) {
+    std::string line;
     for (size_t c = 0; c < cells.size(); ++c) {
-      if (c) out << "  ";
-      const size_t pad = width[c] - cells[c].size();
-      const bool right = !header && looksNumeric(cells[c]);
-      // No trailing blanks after the last column.
-      const bool last = c + 1 == cells.size();
-      if (right) out << std::string(pad, ' ') << cells[c];
-      else out << cells[c] << (last ? "" : std::string(pad, ' '));
+      if (c) line += "  ";
+      const std::string pad(width[c] - cells[c].size(), ' ');
+      const bool right = header ? numeric_column[c] : looksNumeric(cells[c]);
+      line += right ? pad + cells[c] : cells[c] + pad;
     }
-    out << '\n';
+    line.erase(line.find_last_not_of(' ') + 1);
+    out << line << '\n';
   };
   emit(headers_, true);
   size_t total = 0;

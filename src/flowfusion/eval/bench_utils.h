@@ -16,7 +16,8 @@ double mean(const std::vector<double>& values);  // NaN when empty
 double peakResidentMiB();
 
 // Fixed-width text table: one header row, a rule, then the rows. Cells that read as numbers are
-// right-aligned, other cells left-aligned; columns are as wide as their widest cell.
+// right-aligned, other cells left-aligned, headers of all-numeric columns right-aligned; columns
+// are as wide as their widest cell.
 class TextTable {
  public:
   explicit TextTable(std::vector<std::string> headers);
