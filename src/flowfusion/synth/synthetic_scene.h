@@ -61,7 +61,8 @@ struct SynthFrame {
 // Kinect-like depth noise: sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres (Nguyen et al. 2012).
 double depthNoiseSigma(double z_m);
 
-class SceneModel;  // geometry, textures and motion (synthetic_scene.cpp)
+class SceneModel;  // geometry, textures and motion (scene_model.h)
+struct CameraPath;
 
 class SyntheticScene {
  public:
@@ -92,6 +93,7 @@ class SyntheticScene {
   SynthConfig config_;
   CameraIntrinsics camera_;
   std::unique_ptr<SceneModel> model_;
+  std::shared_ptr<const CameraPath> camera_path_;
 };
 
 // Writes every frame in the TUM layout (rgb/, depth/, masks/, rgb.txt, depth.txt, groundtruth.txt,
