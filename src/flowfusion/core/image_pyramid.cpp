@@ -71,7 +71,7 @@ void gradients(const cv::Mat& img, cv::Mat& gx, cv::Mat& gy, bool depth) {
 }  // namespace
 
 std::vector<PyramidLevel> buildPyramid(const cv::Mat& intensity, const cv::Mat& depth,
-                                       const CameraIntrinsics& camera, int levels) {
+                                       const CameraIntrinsics& camera, int levels, int first_gradient_level) {
   std::vector<PyramidLevel> pyr(levels);
   pyr[0].intensity = intensity;
   pyr[0].depth = depth;
@@ -81,9 +81,9 @@ std::vector<PyramidLevel> buildPyramid(const cv::Mat& intensity, const cv::Mat& 
     pyr[l].depth = downsampleDepth(pyr[l - 1].depth);
     pyr[l].camera = camera.atLevel(l);
   }
-  for (auto& lv : pyr) {
-    gradients(lv.intensity, lv.grad_x, lv.grad_y, false);
-    gradients(lv.depth, lv.dgrad_x, lv.dgrad_y, true);
+  for (int l = first_gradient_level; l < levels; ++l) {
+    gradients(pyr[l].intensity, pyr[l].grad_x, pyr[l].grad_y, false);
+    gradients(pyr[l].depth, pyr[l].dgrad_x, pyr[l].dgrad_y, true);
   }
   return pyr;
 }

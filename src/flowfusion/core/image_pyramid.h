@@ -22,8 +22,9 @@ struct PyramidLevel {
   CameraIntrinsics camera;
 };
 
-// Builds `levels` levels with gradients. Level 0 is not copied.
+// Builds `levels` levels; gradients only from `first_gradient_level` up, since levels finer
+// than the finest one used need none. Level 0 is not copied.
 std::vector<PyramidLevel> buildPyramid(const cv::Mat& intensity, const cv::Mat& depth,
-                                       const CameraIntrinsics& camera, int levels);
+                                       const CameraIntrinsics& camera, int levels, int first_gradient_level = 0);
 
 }  // namespace ff

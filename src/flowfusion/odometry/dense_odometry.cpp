@@ -1,0 +1,344 @@
+#include "flowfusion/odometry/dense_odometry.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+void validate(const OdometryConfig& c) {
+  const auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw InputError("odometry." + what);
+  };
+  require(c.levels >= 1 && c.levels <= 8, "levels must be in [1, 8]");
+  require(c.finest_level >= 0 && c.finest_level < c.levels, "finest_level must be in [0, levels)");
+  require(c.max_iterations >= 1 && c.max_iterations_finest >= 1,
+          "max_iterations and max_iterations_finest must be at least 1");
+  require(c.alpha_I >= 0, "alpha_I must be non-negative");
+  require(c.sigma_I > 0, "sigma_I must be positive");
+  require(c.cauchy_c > 0, "cauchy_c must be positive");
+  require(c.use_intensity || c.use_depth, "use_intensity and use_depth cannot both be false");
+  require(c.depth_sigma_a > 0 && c.depth_sigma_b >= 0, "depth_sigma_a must be positive, depth_sigma_b non-negative");
+  require(c.min_depth > 0 && c.max_depth > c.min_depth, "min_depth must be positive and below max_depth");
+  require(c.min_valid_fraction >= 0 && c.min_valid_fraction < 1, "min_valid_fraction must be in [0, 1)");
+  require(c.max_translation > 0 && c.max_rotation_deg > 0, "max_translation and max_rotation_deg must be positive");
+}
+
+OdometryFrame prepareOdometryFrame(const cv::Mat& intensity, const cv::Mat& depth, const CameraIntrinsics& camera,
+                                   const OdometryConfig& config) {
+  OdometryFrame f;
+  f.pyramid = buildPyramid(intensity, depth, camera, config.levels, config.finest_level);
+  return f;
+}
+
+namespace {
+
+// Bilinear sample of a CV_32F image at (u, v); caller guarantees 0 <= u < cols-1, 0 <= v < rows-1.
+inline float bilinear(const cv::Mat& m, int x0, int y0, float ax, float ay) {
+  const float* r0 = m.ptr<float>(y0) + x0;
+  const float* r1 = m.ptr<float>(y0 + 1) + x0;
+  return (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+}
+
+// Depth at (u, v) when all four neighbours are valid and lie on one surface, else 0.
+inline float bilinearDepth(const cv::Mat& d, int x0, int y0, float ax, float ay) {
+  const float* r0 = d.ptr<float>(y0) + x0;
+  const float* r1 = d.ptr<float>(y0 + 1) + x0;
+  const float a = r0[0], b = r0[1], c = r1[0], e = r1[1];
+  const float lo = std::min(std::min(a, b), std::min(c, e));
+  const float hi = std::max(std::max(a, b), std::max(c, e));
+  if (lo <= 0 || hi > lo * 1.05f) return 0;
+  return (1 - ay) * ((1 - ax) * a + ax * b) + ay * ((1 - ax) * c + ax * e);
+}
+
+inline float depthSigma(float z, const OdometryConfig& c) {
+  const float dz = z - 0.4f;
+  return static_cast<float>(c.depth_sigma_a + c.depth_sigma_b * dz * dz);
+}
+
+// log(1 + q) for q >= 0 to about 1e-4 relative: the robust cost only decides whether a step
+// lowered the cost, and std::log1p took a quarter of the odometry's time.
+inline float fastLog1p(float q) {
+  const float x = 1.0f + q;
+  int32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const int e = ((bits >> 23) & 0xff) - 127;
+  bits = (bits & 0x007fffff) | 0x3f800000;  // mantissa m in [1, 2)
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  // log(m) on [1, 2): log((1+s)/(1-s)) = 2 (s + s^3/3 + s^5/5 + s^7/7), s = (m-1)/(m+1) <= 1/3.
+  const float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
+  return 0.69314718f * e + 2.0f * s * (1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7))));
+}
+
+// Normal equations (upper triangle of J^T W J, J^T W r), cost and count. Terms are summed in
+// float within one image row and carried over in double, which keeps the inner loop cheap
+// without losing precision over hundreds of thousands of pixels.
+struct Accumulator {
+  std::array<double, 21> H{};
+  std::array<double, 6> g{};
+  double cost = 0;
+  int count = 0;
+  std::array<float, 21> Hr{};
+  std::array<float, 6> gr{};
+  float cost_r = 0;
+
+  void add(const float J[6], float r, float w) {
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      const float wj = w * J[i];
+      gr[i] += wj * r;
+      for (int j = i; j < 6; ++j) Hr[k++] += wj * J[j];
+    }
+  }
+  void flushRow() {
+    for (int i = 0; i < 21; ++i) H[i] += Hr[i];
+    for (int i = 0; i < 6; ++i) g[i] += gr[i];
+    cost += cost_r;
+    Hr.fill(0);
+    gr.fill(0);
+    cost_r = 0;
+  }
+  void merge(const Accumulator& o) {
+    for (int i = 0; i < 21; ++i) H[i] += o.H[i];
+    for (int i = 0; i < 6; ++i) g[i] += o.g[i];
+    cost += o.cost;
+    count += o.count;
+  }
+  Matrix6d hessian() const {
+    Matrix6d m;
+    int k = 0;
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) m(i, j) = m(j, i) = H[k++];
+    return m;
+  }
+};
+
+// Where a reference pixel lands in the current frame, and the values found there.
+struct Warp {
+  float qx, qy, qz;  // point in the current camera frame, m
+  float u, v;        // pixel in the current frame
+  int x0, y0;
+  float ax, ay;
+};
+
+inline bool warpPixel(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const CameraIntrinsics& cam, float px,
+                      float py, float pz, float min_depth, Warp& w) {
+  w.qx = R(0, 0) * px + R(0, 1) * py + R(0, 2) * pz + t.x();
+  w.qy = R(1, 0) * px + R(1, 1) * py + R(1, 2) * pz + t.y();
+  w.qz = R(2, 0) * px + R(2, 1) * py + R(2, 2) * pz + t.z();
+  if (w.qz < min_depth) return false;
+  w.u = static_cast<float>(cam.fx) * w.qx / w.qz + static_cast<float>(cam.cx);
+  w.v = static_cast<float>(cam.fy) * w.qy / w.qz + static_cast<float>(cam.cy);
+  if (!(w.u >= 0 && w.v >= 0 && w.u < cam.width - 1 && w.v < cam.height - 1)) return false;
+  w.x0 = static_cast<int>(w.u);
+  w.y0 = static_cast<int>(w.v);
+  w.ax = w.u - w.x0;
+  w.ay = w.v - w.y0;
+  return true;
+}
+
+// Weights resized to a level's size (nearest, as weights are per-cluster constants).
+cv::Mat weightsAtLevel(const cv::Mat& weights, const cv::Size& size) {
+  if (weights.empty()) return {};
+  CV_Assert(weights.type() == CV_32FC1);
+  if (weights.size() == size) return weights;
+  cv::Mat out;
+  cv::resize(weights, out, size, 0, 0, weights.cols > size.width ? cv::INTER_AREA : cv::INTER_NEAREST);
+  return out;
+}
+
+constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
+
+}  // namespace
+
+DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { validate(config_); }
+
+OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_init,
+                                       const cv::Mat& weights) const {
+  const OdometryConfig& c = config_;
+  OdometryResult result;
+  result.T_cur_ref = T_init;
+  if (ref.pyramid.size() < static_cast<size_t>(c.levels) || cur.pyramid.size() < static_cast<size_t>(c.levels)) {
+    result.message = "frames were prepared with fewer pyramid levels than configured";
+    return result;
+  }
+  SE3 T = T_init;
+  const float cI = static_cast<float>(c.cauchy_c), inv_c2 = 1.0f / (cI * cI);
+  const float sI = static_cast<float>(c.alpha_I / c.sigma_I);
+  Matrix6d H_last = Matrix6d::Zero();
+
+  for (int level = c.levels - 1; level >= c.finest_level; --level) {
+    const PyramidLevel& A = ref.level(level);
+    const PyramidLevel& B = cur.level(level);
+    const CameraIntrinsics& cam = A.camera;
+    const cv::Mat wimg = weightsAtLevel(weights, A.depth.size());
+    const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
+    const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
+    const float slope_sigma = static_cast<float>(c.depth_slope_sigma);
+    const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
+    double prev_cost = std::numeric_limits<double>::infinity();
+    SE3 T_before_step = T;
+
+    const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
+    for (int it = 0; it < iterations; ++it) {
+      const Eigen::Matrix3f R = T.rotation().cast<float>();
+      const Eigen::Vector3f t = T.translation().cast<float>();
+      std::array<Accumulator, kStripes> acc{};
+      const int rows = A.depth.rows;
+      cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+          Accumulator& a = acc[s];
+          const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
+          for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) {
+            const float* dA = A.depth.ptr<float>(y);
+            const float* iA = A.intensity.ptr<float>(y);
+            const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
+            for (int x = 1; x < A.depth.cols - 1; ++x) {
+              const float z = dA[x];
+              if (!(z >= zmin && z <= zmax)) continue;
+              const float v_pix = wr ? wr[x] : 1.0f;
+              if (v_pix <= 0) continue;
+              const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
+              Warp w;
+              if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
+              // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
+              const float iz = 1.0f / w.qz, iz2 = iz * iz;
+              const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
+                                   fx * (1 + w.qx * w.qx * iz2), -fx * w.qy * iz};
+              const float Jv[6] = {0, fy * iz, -fy * w.qy * iz2, -fy * (1 + w.qy * w.qy * iz2),
+                                   fy * w.qx * w.qy * iz2, fy * w.qx * iz};
+              bool used = false;
+              if (c.use_intensity) {
+                const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
+                const float gx = bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI;
+                const float gy = bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI;
+                float J[6];
+                for (int k = 0; k < 6; ++k) J[k] = gx * Ju[k] + gy * Jv[k];
+                const float q = r * r * inv_c2;
+                a.add(J, r, v_pix / (1 + q));
+                a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
+                used = true;
+              }
+              if (c.use_depth) {
+                const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+                if (zB > 0) {
+                  const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
+                  const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
+                  const float slope = std::sqrt(gx * gx + gy * gy);
+                  const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
+                  const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
+                  const float inv_s = 1.0f / sigma;
+                  const float r = (zB - w.qz) * inv_s;
+                  // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
+                  const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
+                  float J[6];
+                  for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
+                  const float q = r * r * inv_c2;
+                  a.add(J, r, v_pix / (1 + q));
+                  a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
+                  used = true;
+                }
+              }
+              if (used) ++a.count;
+            }
+            a.flushRow();
+          }
+        }
+      });
+      Accumulator total;
+      for (const auto& a : acc) total.merge(a);
+      const Matrix6d H = total.hessian();
+      Vector6d g;
+      for (int i = 0; i < 6; ++i) g[i] = total.g[i];
+      ++result.iterations;
+      if (level == c.finest_level) {
+        result.valid_pixels = total.count;
+        result.final_cost = total.count ? total.cost / total.count : 0;
+      }
+      if (total.count < 12) break;
+      const double cost = total.cost / total.count;
+      // A rise in cost means the last step overshot: take it back and refine on the next level.
+      if (cost > prev_cost * 1.0001) {
+        T = T_before_step;
+        break;
+      }
+      prev_cost = cost;
+      H_last = H;
+      const Eigen::LDLT<Matrix6d> ldlt(H);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
+      const Vector6d delta = ldlt.solve(-g);
+      if (!delta.allFinite()) break;
+      T_before_step = T;
+      T = expSE3(delta) * T;
+      if (delta.norm() < c.convergence_eps) break;
+    }
+  }
+
+  result.hessian = H_last;
+  const int level_pixels = ref.level(c.finest_level).depth.rows * ref.level(c.finest_level).depth.cols;
+  const auto fail = [&](const std::string& why) {
+    result.ok = false;
+    result.message = why;
+    result.T_cur_ref = T_init;
+    return result;
+  };
+  if (result.valid_pixels < std::max(12.0, c.min_valid_fraction * level_pixels))
+    return fail("tracking failed: " + std::to_string(result.valid_pixels) + " pixels with valid depth overlap (need " +
+                std::to_string(static_cast<int>(std::max(12.0, c.min_valid_fraction * level_pixels))) + ")");
+  if (!T.matrix().allFinite()) return fail("tracking failed: the solution is not finite");
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> es(H_last);
+  if (es.eigenvalues()(0) <= 1e-9 * std::max(1.0, es.eigenvalues()(5)))
+    return fail("tracking failed: the motion is not constrained (degenerate scene)");
+  if (translationNorm(T) > c.max_translation || rotationAngleDeg(T) > c.max_rotation_deg)
+    return fail("tracking failed: diverged (" + std::to_string(translationNorm(T)) + " m, " +
+                std::to_string(rotationAngleDeg(T)) + " deg in one frame)");
+  result.ok = true;
+  result.T_cur_ref = T;
+  result.message = "ok";
+  return result;
+}
+
+PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_cur_ref,
+                                     int level, const OdometryConfig& c) {
+  const PyramidLevel& A = ref.level(level);
+  const PyramidLevel& B = cur.level(level);
+  const CameraIntrinsics& cam = A.camera;
+  PixelResiduals out;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  out.abs_intensity = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
+  out.abs_depth = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
+  const Eigen::Matrix3f R = T_cur_ref.rotation().cast<float>();
+  const Eigen::Vector3f t = T_cur_ref.translation().cast<float>();
+  const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
+  cv::parallel_for_(cv::Range(0, A.depth.rows), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y) {
+      const float* dA = A.depth.ptr<float>(y);
+      const float* iA = A.intensity.ptr<float>(y);
+      float* oI = out.abs_intensity.ptr<float>(y);
+      float* oD = out.abs_depth.ptr<float>(y);
+      for (int x = 0; x < A.depth.cols; ++x) {
+        const float z = dA[x];
+        if (!(z >= zmin && z <= zmax)) continue;
+        Warp w;
+        if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
+                       (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
+          continue;
+        oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
+        const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+        if (zB > 0) oD[x] = std::abs(zB - w.qz);
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace ff
