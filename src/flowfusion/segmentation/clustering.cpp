@@ -43,6 +43,13 @@ void checkClusterInput(const RgbdFrame& frame, const CameraIntrinsics& camera, c
 
 void fillUnlabeled(cv::Mat& labels, const cv::Mat& depth, double max_rel, int& num_clusters) {
   const int W = labels.cols, H = labels.rows;
+  bool any_missing = false;
+  for (int v = 0; v < H && !any_missing; ++v) {
+    const int* l = labels.ptr<int>(v);
+    const float* z = depth.ptr<float>(v);
+    for (int u = 0; u < W; ++u) any_missing |= l[u] < 0 && validDepth(z[u]);
+  }
+  if (!any_missing) return;
   std::deque<int> queue;
   for (int v = 0; v < H; ++v)
     for (int u = 0; u < W; ++u)
@@ -94,7 +101,7 @@ ClusterGraph buildClusterGraph(cv::Mat labels, int num_labels, const cv::Mat& de
   const int n = g.num_clusters;
   g.sizes.assign(n, 0);
   std::vector<double> zsum(n, 0.0);
-  std::vector<Eigen::Vector3d> psum(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> psum(n, Eigen::Vector3d::Zero());  // sums of (u z, v z, z)
   std::vector<std::uint64_t> contacts;
   auto key = [](int a, int b) {
     return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
@@ -107,7 +114,7 @@ ClusterGraph buildClusterGraph(cv::Mat labels, int num_labels, const cv::Mat& de
       const int c = l[u] = remap[l[u]];
       ++g.sizes[c];
       zsum[c] += z[u];
-      psum[c] += camera.backproject(u, v, z[u]);
+      psum[c] += Eigen::Vector3d(u * z[u], v * z[u], z[u]);
     }
   }
   // Second pass once all labels are renumbered.
@@ -143,7 +150,9 @@ ClusterGraph buildClusterGraph(cv::Mat labels, int num_labels, const cv::Mat& de
   g.centroids.resize(n);
   for (int c = 0; c < n; ++c) {
     g.mean_depth[c] = static_cast<float>(zsum[c] / g.sizes[c]);
-    g.centroids[c] = (psum[c] / g.sizes[c]).cast<float>();
+    const Eigen::Vector3d m = psum[c] / g.sizes[c];
+    g.centroids[c] = Eigen::Vector3f((m.x() - camera.cx * m.z()) / camera.fx, (m.y() - camera.cy * m.z()) / camera.fy,
+                                     m.z());
   }
   g.labels = labels;
   return g;
