@@ -1,0 +1,157 @@
+// Augmenting static sequences: compositing with a depth test, exact masks, interpolated poses.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A small static sequence (the static twin of a synthetic scene) with ground truth.
+std::string writeStatic(const fs::path& dir, int frames = 6) {
+  ff::synth::SynthConfig c;
+  c.seed = 5;
+  c.width = 160;
+  c.height = 120;
+  c.frames = frames;
+  c.objects = 0;
+  c.noise = false;
+  ff::synth::writeSequence(ff::synth::SyntheticScene(c), dir.string());
+  fs::remove_all(dir / "masks");
+  return dir.string();
+}
+
+ff::synth::AugmentConfig noiseless(int objects = 2) {
+  ff::synth::AugmentConfig c;
+  c.objects = objects;
+  c.noise = false;
+  c.seed = 3;
+  return c;
+}
+
+}  // namespace
+
+TEST(Augment, CompositesObjectsWithDepthTestAndExactMasks) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  const std::string out = (tmp.path() / "aug").string();
+  const auto report = ff::synth::augmentSequence(in, out, noiseless());
+  EXPECT_EQ(report.frames_written, 6);
+  EXPECT_TRUE(report.dropped_timestamps.empty());
+  const auto src = ff::TumSequence::open(in), dst = ff::TumSequence::open(out);
+  ASSERT_EQ(dst.size(), 6u);
+  ASSERT_TRUE(dst.masksDir());
+  ASSERT_TRUE(dst.groundtruth());
+  EXPECT_TRUE(fs::exists(fs::path(out) / "scene.json"));
+  EXPECT_NEAR(dst.camera().fx, src.camera().fx, 1e-9);
+  int mask_total = 0;
+  for (size_t i = 0; i < 6; ++i) {
+    const auto a = src.load(i), b = dst.load(i);
+    EXPECT_NEAR(a.timestamp, b.timestamp, 1e-9);
+    ff::SE3 Ta, Tb;
+    ASSERT_TRUE(ff::interpolatePose(*src.groundtruth(), a.timestamp, Ta));
+    ASSERT_TRUE(ff::interpolatePose(*dst.groundtruth(), b.timestamp, Tb));
+    EXPECT_LT(ff::translationNorm(Ta.inverse() * Tb), 1e-4);
+    const cv::Mat mask =
+        cv::imread((fs::path(*dst.masksDir()) / (ff::timestampName(b.timestamp) + ".png")).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(mask.size(), a.depth.size());
+    mask_total += cv::countNonZero(mask);
+    for (int v = 0; v < mask.rows; ++v)
+      for (int u = 0; u < mask.cols; ++u) {
+        const float za = a.depth.at<float>(v, u), zb = b.depth.at<float>(v, u);
+        if (mask.at<uint8_t>(v, u)) {
+          EXPECT_TRUE(za == 0 || zb < za + 1e-4) << "an object pixel must be in front of the real surface";
+          EXPECT_GT(zb, 0.0f);
+        } else {
+          EXPECT_EQ(za, zb) << "depth outside the mask is the real depth";
+        }
+      }
+  }
+  EXPECT_GT(mask_total, 500) << "objects are placed in view of the first frames";
+}
+
+TEST(Augment, DropsFramesWithoutGroundTruthPose) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static", 8);
+  // Remove poses around frames 3..4 so that their gap (5 frames = 0.17 s) exceeds max_pose_gap.
+  auto gt = ff::readTrajectory(in + "/groundtruth.txt");
+  gt.erase(gt.begin() + 2, gt.begin() + 6);
+  ff::writeTrajectory(in + "/groundtruth.txt", gt);
+  const auto report = ff::synth::augmentSequence(in, (tmp.path() / "aug").string(), noiseless(1));
+  EXPECT_EQ(report.frames_written, 4);
+  EXPECT_EQ(report.dropped_timestamps.size(), 4u);
+}
+
+TEST(Augment, FrameRangeAndNoise) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  auto c = noiseless();
+  c.noise = true;
+  c.first_frame = 2;
+  c.last_frame = 4;
+  const auto report = ff::synth::augmentSequence(in, (tmp.path() / "aug").string(), c);
+  EXPECT_EQ(report.frames_written, 3);
+  EXPECT_EQ(ff::TumSequence::open((tmp.path() / "aug").string()).size(), 3u);
+}
+
+TEST(Augment, BadInputsAreInputErrors) {
+  ff::testing::TempDir tmp;
+  EXPECT_THROW(ff::synth::augmentSequence((tmp.path() / "missing").string(), (tmp.path() / "o1").string(), noiseless()),
+               ff::InputError);
+  const std::string in = writeStatic(tmp.path() / "static", 3);
+  auto c = noiseless();
+  c.first_frame = 5;
+  EXPECT_THROW(ff::synth::augmentSequence(in, (tmp.path() / "o2").string(), c), ff::InputError);
+  c = noiseless();
+  c.objects = 0;
+  EXPECT_THROW(ff::synth::augmentSequence(in, (tmp.path() / "o3").string(), c), ff::InputError);
+  const fs::path busy = tmp.path() / "busy";
+  fs::create_directories(busy);
+  std::ofstream(busy / "x.txt") << "x";
+  EXPECT_THROW(ff::synth::augmentSequence(in, busy.string(), noiseless()), ff::InputError);
+  EXPECT_NO_THROW(ff::synth::augmentSequence(in, busy.string(), noiseless(), {}, true));
+  fs::remove(fs::path(in) / "groundtruth.txt");
+  try {
+    ff::synth::augmentSequence(in, (tmp.path() / "o4").string(), noiseless());
+    FAIL() << "expected InputError";
+  } catch (const ff::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("groundtruth"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Augment, RealFr1XyzFrames) {
+  FF_REQUIRE_SHARED_DATA(dir);
+  ff::testing::TempDir tmp;
+  ff::synth::AugmentConfig c;
+  c.last_frame = 3;
+  const auto report = ff::synth::augmentSequence(dir, tmp.str(), c);
+  EXPECT_EQ(report.frames_written + static_cast<int>(report.dropped_timestamps.size()), 4);
+  ASSERT_GT(report.frames_written, 0);
+  const auto seq = ff::TumSequence::open(tmp.str());
+  EXPECT_NEAR(seq.camera().fx, 517.3, 1e-6);
+  ASSERT_TRUE(seq.masksDir());
+  const auto f = seq.load(0);
+  const cv::Mat mask = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(f.timestamp) + ".png")).string(),
+                                  cv::IMREAD_UNCHANGED);
+  EXPECT_GT(cv::countNonZero(mask), 1000) << "objects at 0.7-2 m in front of the first camera";
+}
+
+TEST(AugmentCli, RunsOnStaticSequence) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static", 4);
+  const std::string out = (tmp.path() / "aug").string();
+  auto r = ff::testing::runFlowfusion("augment " + in + " " + out + " --frames 1:2 --objects 1");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(ff::TumSequence::open(out).size(), 2u);
+  r = ff::testing::runFlowfusion("augment " + in + " " + out + " --frames x");
+  EXPECT_EQ(r.status, 2) << r.output;
+  r = ff::testing::runFlowfusion("augment " + (tmp.path() / "none").string() + " " + out + "2");
+  EXPECT_EQ(r.status, 2) << r.output;
+}
