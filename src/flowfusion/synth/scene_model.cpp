@@ -380,8 +380,17 @@ cv::Mat kinectDepth(const cv::Mat& depth_clean, const cv::Mat& cos_incidence, co
   // Kinect v1: disparity in 1/8 pixel steps, focal length ~580 px, baseline ~7.5 cm, so depth
   // steps of z^2 / 348 m (3 mm at 1 m, 10 cm at 6 m).
   constexpr double kDisparityConstant = 580.0 * 0.075 * 8.0;
-  // Shadow width in pixels scales with the image width (1 px at 320, 2 px at 640).
+  // Kinect shadows: pixels whose neighbourhood holds a clearly nearer surface get no depth; always
+  // within `shadow` pixels of the edge, often up to 2 * shadow on one side (the projector sits
+  // beside the IR camera). Width scales with the image (1 px at 320, 2 px at 640).
   const int shadow = std::max(1, static_cast<int>(std::lround(W / 320.0)));
+  cv::Mat z_far = depth_clean.clone(), near_min, wide_min;
+  z_far.setTo(1e9f, depth_clean <= 0);
+  if (options.depth_shadows) {
+    cv::erode(z_far, near_min, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * shadow + 1, 3)));
+    cv::erode(z_far, wide_min, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3 * shadow + 1, 3)),
+              cv::Point(shadow, 1));
+  }
   const uint64_t key = hashCombine(options.noise_key, 0x44455054ULL);
   cv::Mat out(H, W, CV_32F);
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
@@ -397,22 +406,9 @@ cv::Mat kinectDepth(const cv::Mat& depth_clean, const cv::Mat& cos_incidence, co
         if (c_in[u] < 0.08 + 0.1 * hashUniform(pk ^ 1)) continue;  // grazing angles: no return
         if (hashUniform(pk ^ 2) < 0.002) continue;                  // sparse dropouts
         if (options.depth_shadows) {
-          bool shadowed = false;
           const double step = std::max(0.05, 0.03 * z);
-          for (int dv = -1; dv <= 1 && !shadowed; ++dv) {
-            const int vv = v + dv;
-            if (vv < 0 || vv >= H) continue;
-            const float* zr = depth_clean.ptr<float>(vv);
-            // Wider on one side: the projector sits beside the IR camera.
-            for (int du = -shadow; du <= 2 * shadow && !shadowed; ++du) {
-              const int uu = u + du;
-              if (uu < 0 || uu >= W || (du == 0 && dv == 0)) continue;
-              const double zn = zr[uu];
-              const bool edge = zn > 0 && zn < z - step;
-              if (edge && (std::abs(du) <= shadow / 2 + 1 || hashUniform(pk ^ (3 + du)) < 0.6)) shadowed = true;
-            }
-          }
-          if (shadowed) continue;
+          if (near_min.at<float>(v, u) < z - step) continue;
+          if (wide_min.at<float>(v, u) < z - step && hashUniform(pk ^ 3) < 0.6) continue;
         }
         double zn = z + depthNoiseSigma(z) * hashNormal(pk ^ 7);
         zn = kDisparityConstant / std::round(kDisparityConstant / zn);

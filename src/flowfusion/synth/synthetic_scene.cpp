@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <opencv2/imgproc.hpp>
 
 #include "flowfusion/core/config.h"
@@ -399,16 +400,22 @@ void writeSequence(const SyntheticScene& scene, const std::string& out_dir, bool
   prepareOutputDir(out_dir, overwrite);
   TumWriter writer(out_dir, scene.camera());
   // Frames are rendered a batch at a time in parallel (each render's own row loop then runs
-  // serially inside its worker), and written in order.
+  // serially inside its worker); PNG encoding of one batch overlaps the rendering of the next.
   const int batch = 8;
+  std::future<void> writing;
   for (int first = 0; first < scene.frameCount(); first += batch) {
     const int n = std::min(batch, scene.frameCount() - first);
-    std::vector<SynthFrame> frames(n);
+    auto frames = std::make_shared<std::vector<SynthFrame>>(n);
     cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& r) {
-      for (int i = r.start; i < r.end; ++i) frames[i] = scene.render(first + i);
+      for (int i = r.start; i < r.end; ++i) (*frames)[i] = scene.render(first + i);
     });
-    for (const SynthFrame& f : frames) writer.add(f.frame.timestamp, f.frame.color, f.frame.depth, f.T_world_cam, f.mask);
+    if (writing.valid()) writing.get();
+    writing = std::async(std::launch::async, [&writer, frames] {
+      for (const SynthFrame& f : *frames)
+        writer.add(f.frame.timestamp, f.frame.color, f.frame.depth, f.T_world_cam, f.mask);
+    });
   }
+  writing.get();
   writer.finish("flowfusion synth, seed " + std::to_string(scene.config().seed) + ", generator version " +
                 std::to_string(kGeneratorVersion));
   writeJsonFile((std::filesystem::path(out_dir) / "scene.json").string(), scene.description());

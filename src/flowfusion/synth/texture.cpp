@@ -288,11 +288,11 @@ cv::Vec3f Texture::bilinear(int level, double x, double y) const {
 }
 
 cv::Vec3f Texture::sample(double u_m, double v_m, double footprint_m) const {
-  const double lod = std::clamp(std::log2(std::max(footprint_m / texel_m_, 1e-9)), 0.0,
-                                static_cast<double>(levels_.size() - 1));
+  const float lod = std::clamp(std::log2(std::max(static_cast<float>(footprint_m / texel_m_), 1e-9f)), 0.0f,
+                               static_cast<float>(levels_.size() - 1));
   const int l0 = static_cast<int>(lod);
   const int l1 = std::min(l0 + 1, static_cast<int>(levels_.size()) - 1);
-  const float a = static_cast<float>(lod - l0);
+  const float a = lod - static_cast<float>(l0);
   const double s0 = 1.0 / (texel_m_ * (1 << l0));
   const cv::Vec3f c0 = bilinear(l0, u_m * s0, v_m * s0);
   if (a <= 0.0f || l1 == l0) return c0;
