@@ -1,12 +1,16 @@
 #pragma once
 // One RGB-D observation in the units every stage uses.
 #include <opencv2/core.hpp>
+#include <limits>
 #include <string>
 
 namespace ff {
 
 struct RgbdFrame {
   double timestamp = 0;  // seconds (the colour image's timestamp)
+  // seconds; the depth image's own time. Colour and depth of TUM sequences are up to 20 ms
+  // apart; NaN = the same as timestamp.
+  double depth_timestamp = std::numeric_limits<double>::quiet_NaN();
   cv::Mat color;         // CV_8UC3, BGR (OpenCV's order)
   cv::Mat intensity;     // CV_32FC1, grey level in [0, 1]
   cv::Mat depth;         // CV_32FC1, metres along the optical axis; 0 = no measurement

@@ -58,6 +58,13 @@ SE3 poseFromTranslationQuaternion(const Eigen::Vector3d& t, const Eigen::Quatern
   return T;
 }
 
+SE3 orthonormalized(const SE3& T) {
+  SE3 out = SE3::Identity();
+  out.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  out.translation() = T.translation();
+  return out;
+}
+
 double rotationAngleDeg(const SE3& T) {
   const double c = std::clamp((T.rotation().trace() - 1.0) * 0.5, -1.0, 1.0);
   return std::acos(c) * 180.0 / M_PI;

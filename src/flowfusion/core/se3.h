@@ -19,6 +19,10 @@ Vector6d logSE3(const SE3& T);
 // TUM trajectory convention: translation then quaternion (qx, qy, qz, qw).
 SE3 poseFromTranslationQuaternion(const Eigen::Vector3d& t, const Eigen::Quaterniond& q);
 
+// The nearest proper rigid transform (rotation re-orthonormalised through a unit quaternion):
+// long chains of products drift off SO(3), and Isometry3d::inverse() assumes R^-1 = R^T.
+SE3 orthonormalized(const SE3& T);
+
 double rotationAngleDeg(const SE3& T);
 double translationNorm(const SE3& T);
 

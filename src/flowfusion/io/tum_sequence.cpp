@@ -163,7 +163,9 @@ RgbdFrame TumSequence::load(size_t i) const {
   };
   check(color, e.rgb_path);
   check(depth, e.depth_path);
-  return makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
+  RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
+  frame.depth_timestamp = e.depth_timestamp;
+  return frame;
 }
 
 TumWriter::TumWriter(std::string dir, const CameraIntrinsics& camera, double depth_scale)

@@ -1,0 +1,50 @@
+#pragma once
+// Options shared by the subcommands that read a sequence and configure the system
+// (`run`, `bench`): camera, depth scale, configuration file and per-setting overrides.
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "flowfusion/core/config.h"
+#include "flowfusion/io/tum_sequence.h"
+#include "flowfusion/pipeline/flowfusion_system.h"
+
+namespace ff::app {
+
+struct SystemOptions {
+  std::string camera;
+  double depth_scale = 5000.0;
+  std::string config_file;
+  std::vector<std::string> overrides;
+  std::string frames;
+  bool no_segmentation = false;
+  std::string tracking;
+
+  void addTo(CLI::App* cmd) {
+    cmd->add_option("--camera", camera, "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy (default: camera.txt or folder name)");
+    cmd->add_option("--depth-scale", depth_scale, "Raw depth units per metre")->capture_default_str();
+    cmd->add_option("--config", config_file, "JSON configuration file (see config.json of any run)");
+    cmd->add_option("--set", overrides, "Override one setting, e.g. --set odometry.levels=3 (repeatable)");
+    cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
+    cmd->add_flag("--no-segmentation", no_segmentation, "Plain robust odometry, no dynamic segmentation");
+    cmd->add_option("--tracking", tracking, "frame_to_model (default) or frame_to_frame");
+  }
+
+  SequenceOptions sequenceOptions() const {
+    SequenceOptions s;
+    s.camera = camera;
+    s.depth_scale = depth_scale;
+    return s;
+  }
+
+  SystemConfig systemConfig() const {
+    std::vector<std::string> all = overrides;
+    if (no_segmentation) all.push_back("pipeline.segmentation=false");
+    if (!tracking.empty()) all.push_back("pipeline.tracking=\"" + tracking + "\"");
+    SystemConfig c = resolveConfig(SystemConfig{}, config_file, all);
+    validate(c);
+    return c;
+  }
+};
+
+}  // namespace ff::app

@@ -1,0 +1,253 @@
+#include "flowfusion/pipeline/flowfusion_system.h"
+
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/core/image_pyramid.h"
+#include "flowfusion/flow/flow_residual.h"
+
+namespace ff {
+
+void validate(const SystemConfig& c) {
+  const PipelineOptions& p = c.pipeline;
+  if (p.tracking != "frame_to_frame" && p.tracking != "frame_to_keyframe" && p.tracking != "frame_to_model")
+    throw InputError("pipeline.tracking must be frame_to_frame, frame_to_keyframe or frame_to_model, got '" +
+                     p.tracking + "'");
+  if (p.tracking == "frame_to_model" && !p.fusion)
+    throw InputError("pipeline.tracking frame_to_model needs pipeline.fusion = true (the map is the model)");
+  if (p.max_iterations < 1) throw InputError("pipeline.max_iterations must be at least 1");
+  if (p.segmentation_level < 0 || p.segmentation_level >= c.odometry.levels)
+    throw InputError("pipeline.segmentation_level must be in [0, odometry.levels)");
+  if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
+  if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
+    throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");
+  validate(c.odometry);
+  validateFusionConfig(c.fusion);
+  makeOpticalFlow(c.flow);
+  makeClusterer(c.clustering);
+  if (!(c.scores.theta_t > c.scores.theta_b)) throw InputError("scores.theta_t must be greater than scores.theta_b");
+}
+
+struct FlowFusionSystem::Previous {
+  RgbdFrame frame;
+  OdometryFrame odo;
+  SE3 T_world_cam;
+  cv::Mat scores;  // b per pixel at the segmentation level, empty when none
+};
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Scores of the previous frame carried into the current one: each previous pixel's score is
+// splatted to where the motion takes it (forward warp with its depth), nearest surface wins.
+cv::Mat carryScores(const cv::Mat& prev_scores, const cv::Mat& prev_depth, const CameraIntrinsics& cam,
+                    const SE3& T_cur_prev) {
+  cv::Mat out(prev_scores.size(), CV_32F, cv::Scalar(0));
+  cv::Mat zbuf(prev_scores.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  for (int y = 0; y < prev_depth.rows; ++y)
+    for (int x = 0; x < prev_depth.cols; ++x) {
+      const float b = prev_scores.at<float>(y, x);
+      const float z = prev_depth.at<float>(y, x);
+      if (b <= 0 || z <= 0) continue;
+      const Eigen::Vector3d q = T_cur_prev * cam.backproject(x, y, z);
+      if (q.z() <= 0) continue;
+      const Eigen::Vector2d uv = cam.project(q);
+      // Splat to the 2x2 neighbourhood so that no holes open up.
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const int u = static_cast<int>(uv.x()) + dx, v = static_cast<int>(uv.y()) + dy;
+          if (u < 0 || v < 0 || u >= out.cols || v >= out.rows) continue;
+          if (q.z() < zbuf.at<float>(v, u)) {
+            zbuf.at<float>(v, u) = static_cast<float>(q.z());
+            out.at<float>(v, u) = b;
+          }
+        }
+    }
+  return out;
+}
+
+double depthTime(const RgbdFrame& f) { return std::isnan(f.depth_timestamp) ? f.timestamp : f.depth_timestamp; }
+
+cv::Mat staticWeights(const cv::Mat& scores) {
+  cv::Mat w;
+  cv::subtract(cv::Scalar(1.0), scores, w);
+  return w;
+}
+
+bool converged(const SE3& a, const SE3& b, const PipelineOptions& p) {
+  const SE3 d = a.inverse() * b;
+  return translationNorm(d) < p.converged_translation && rotationAngleDeg(d) < p.converged_rotation_deg;
+}
+
+}  // namespace
+
+FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera, const SE3& T_world_first)
+    : config_(config), camera_(camera), odometry_((validate(config), config.odometry)), T_world_first_(T_world_first) {
+  if (config_.pipeline.segmentation) {
+    flow_ = makeOpticalFlow(config_.flow);
+    clusterer_ = makeClusterer(config_.clustering);
+  }
+  if (config_.pipeline.fusion) map_ = std::make_unique<StaticMap>(config_.fusion);
+}
+
+FlowFusionSystem::~FlowFusionSystem() = default;
+
+FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
+  const PipelineOptions& opt = config_.pipeline;
+  if (frame.width() != camera_.width || frame.height() != camera_.height)
+    throw InputError(frame.name + ": frame is " + std::to_string(frame.width()) + "x" +
+                     std::to_string(frame.height()) + ", the camera is " + std::to_string(camera_.width) + "x" +
+                     std::to_string(camera_.height));
+  timings_.beginFrame(frame.timestamp);
+  FrameResult result;
+  result.timestamp = frame.timestamp;
+
+  auto t0 = std::chrono::steady_clock::now();
+  OdometryFrame cur = prepareOdometryFrame(frame.intensity, frame.depth, camera_, config_.odometry);
+  timings_.add("odometry", since(t0));
+  const int seg_level = opt.segmentation_level;
+  const CameraIntrinsics seg_camera = camera_.atLevel(seg_level);
+  const cv::Size seg_size(seg_camera.width, seg_camera.height);
+  cv::Mat scores;  // b per pixel at the segmentation level
+
+  if (!prev_) {
+    result.T_world_cam = T_world_first_;
+    result.message = "first frame";
+  } else {
+    // The target: the previous frame, the last keyframe, or the map's prediction at the previous
+    // pose when it covers enough of the view. T_target_prev places the previous camera in it.
+    OdometryFrame model;
+    const OdometryFrame* target = &prev_->odo;
+    SE3 T_world_target = prev_->T_world_cam;
+    if (opt.tracking == "frame_to_keyframe" && keyframe_) {
+      target = &keyframe_->odo;
+      T_world_target = keyframe_->T_world_cam;
+    }
+    const SE3 T_target_prev = T_world_target.inverse() * prev_->T_world_cam;
+    if (opt.tracking == "frame_to_model" && map_ && map_->size() > 0) {
+      t0 = std::chrono::steady_clock::now();
+      const ModelPrediction pred = map_->predict(prev_->T_world_cam, camera_);
+      const double covered = cv::countNonZero(pred.depth > 0);
+      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_->frame.depth > 0);
+      if (covered >= needed) {
+        // The model's depth is averaged over many frames (less noise, less drift); its colour is
+        // blurred by the surfel splats, so the previous image stays the photometric target.
+        // Where the model has no surface the previous frame's depth fills in.
+        cv::Mat depth = pred.depth.clone();
+        prev_->frame.depth.copyTo(depth, pred.depth <= 0);
+        model = prepareOdometryFrame(prev_->frame.intensity, depth, camera_, config_.odometry);
+        target = &model;
+        result.used_model = true;
+      }
+      timings_.add("prediction", since(t0));
+    }
+
+    // T_target_cur: current-camera points into the target camera.
+    const SE3 T_prev_cur_guess = opt.constant_velocity ? T_prev_cur_velocity_ : SE3::Identity();
+    SE3 T_target_cur = T_target_prev * T_prev_cur_guess;
+    if (opt.segmentation && opt.carry_scores && !prev_->scores.empty()) {
+      const cv::Mat prev_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
+      scores = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur_guess.inverse());
+    }
+    t0 = std::chrono::steady_clock::now();
+    const cv::Mat initial_weights = scores.empty() ? cv::Mat() : staticWeights(scores);
+    OdometryResult odo = odometry_.estimate(cur, *target, T_target_cur, initial_weights);
+    if (!odo.ok && result.used_model) {
+      // A thin or wrong prediction: the previous frame is the safer target.
+      target = &prev_->odo;
+      T_world_target = prev_->T_world_cam;
+      result.used_model = false;
+      odo = odometry_.estimate(cur, *target, T_target_cur, initial_weights);
+    }
+    timings_.add("odometry", since(t0));
+    if (odo.ok) T_target_cur = odo.T_cur_ref;
+
+    if (opt.segmentation && odo.ok) {
+      t0 = std::chrono::steady_clock::now();
+      const FlowField flow = flow_->compute(frame.intensity, prev_->frame.intensity);
+      timings_.add("flow", since(t0));
+      t0 = std::chrono::steady_clock::now();
+      RgbdFrame seg_frame;
+      seg_frame.timestamp = frame.timestamp;
+      seg_frame.intensity = cur.level(seg_level).intensity;
+      seg_frame.depth = cur.level(seg_level).depth;
+      const ClusterGraph graph = clusterer_->cluster(seg_frame, seg_camera);
+      timings_.add("clustering", since(t0));
+      // Flow residuals are in pixels of the input image (ScoreConfig's units).
+      const double px_scale = std::ldexp(1.0, seg_level);
+      for (int round = 0; round < opt.max_iterations; ++round) {
+        t0 = std::chrono::steady_clock::now();
+        const PixelResiduals pr = computePixelResiduals(cur, *target, T_target_cur, seg_level, config_.odometry);
+        ResidualImages res;
+        res.r_I = pr.abs_intensity;
+        res.r_D = pr.abs_depth;
+        // The flow runs from the current to the previous image, whatever the target.
+        const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
+        res.r_F = flowResidual(flow, egoFlow(seg_frame.depth, seg_camera, T_prev_cur)) * px_scale;
+        const DynamicScores ds = computeDynamicScores(graph, res, config_.scores);
+        scores = pixelScores(graph, ds);
+        timings_.add("scores", since(t0));
+        t0 = std::chrono::steady_clock::now();
+        const OdometryResult again = odometry_.estimate(cur, *target, T_target_cur, staticWeights(scores));
+        timings_.add("odometry", since(t0));
+        result.iterations = round + 1;
+        if (!again.ok) break;
+        const bool done = converged(T_target_cur, again.T_cur_ref, opt);
+        T_target_cur = again.T_cur_ref;
+        if (done) break;
+      }
+    }
+    if (!odo.ok) {
+      ++failures_;
+      result.tracking_ok = false;
+      result.message = odo.message + "; kept the constant-velocity guess";
+    }
+    result.T_world_cam = orthonormalized(T_world_target * T_target_cur);
+    T_prev_cur_velocity_ = prev_->T_world_cam.inverse() * result.T_world_cam;
+    velocity_dt_ = depthTime(frame) - depthTime(prev_->frame);
+  }
+
+  cv::Mat full_scores;
+  if (!scores.empty())
+    cv::resize(scores, full_scores, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
+  result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
+                                            : dynamicMask(full_scores, opt.mask_threshold);
+  result.scores = scores;
+  if (map_) {
+    t0 = std::chrono::steady_clock::now();
+    map_->integrate(frame, camera_, result.T_world_cam, full_scores.empty() ? cv::Mat() : staticWeights(full_scores));
+    timings_.add("fusion", since(t0));
+  }
+
+  if (opt.tracking == "frame_to_keyframe") {
+    const SE3 T_kf_cur = keyframe_ ? keyframe_->T_world_cam.inverse() * result.T_world_cam : SE3::Identity();
+    if (!keyframe_ || translationNorm(T_kf_cur) > opt.keyframe_translation ||
+        rotationAngleDeg(T_kf_cur) > opt.keyframe_rotation_deg || !result.tracking_ok) {
+      if (!keyframe_) keyframe_ = std::make_unique<Previous>();
+      keyframe_->frame = frame;
+      keyframe_->odo = cur;
+      keyframe_->T_world_cam = result.T_world_cam;
+    }
+  }
+  if (!prev_) prev_ = std::make_unique<Previous>();
+  prev_->frame = frame;
+  prev_->odo = std::move(cur);
+  prev_->T_world_cam = result.T_world_cam;
+  prev_->scores = scores;
+  // The geometry dominates the odometry, so the pose found is the camera's at the depth image's
+  // time; the trajectory is reported at the colour time, moved there along the last motion.
+  SE3 T_world_cam_colour = result.T_world_cam;
+  if (opt.shift_to_colour_time && velocity_dt_ > 0) {
+    const double s = (frame.timestamp - depthTime(frame)) / velocity_dt_;
+    if (std::abs(s) < 1.0) T_world_cam_colour = orthonormalized(result.T_world_cam * expSE3(s * logSE3(T_prev_cur_velocity_)));
+  }
+  trajectory_.push_back({frame.timestamp, T_world_cam_colour});
+  return result;
+}
+
+}  // namespace ff

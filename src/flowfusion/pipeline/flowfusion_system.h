@@ -1,0 +1,121 @@
+#pragma once
+// The per-frame FlowFusion loop (paper Fig. 1, Sections III-A to III-C).
+//
+// Frames: the paper's reference frame A, whose pixels carry clusters, residuals and scores, is
+// here the CURRENT frame, and the frame it is aligned to (the paper's B) is the previous frame or
+// the static map's prediction at the previous pose. The mathematics is the paper's with time
+// reversed; in exchange every frame's dynamic mask, fusion weights and odometry weights live in
+// its own pixels, and the map prediction (static only by construction) is the target, never the
+// weighted side. Optical flow therefore runs from the current to the previous image.
+//
+// Per frame:  odometry (Eq. 1, weighted by the previous frame's scores carried over when
+// available) -> [flow residual (Eq. 8-9), clusters, scores (Eq. 10-15), weighted odometry
+// (Eq. 16)] repeated until the motion settles -> static map fusion with weights 1 - b.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/flow/optical_flow.h"
+#include "flowfusion/fusion/static_map.h"
+#include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/odometry/dense_odometry.h"
+#include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/dynamic_score.h"
+
+namespace ff {
+
+struct PipelineOptions {
+  // "frame_to_frame": align to the previous frame; "frame_to_keyframe": align to the last
+  // keyframe, replaced once the camera moved keyframe_translation or keyframe_rotation_deg from
+  // it (drift grows per keyframe, not per frame); "frame_to_model": align to the static map's
+  // depth predicted at the previous pose (falls back to the previous frame where the map is thin).
+  std::string tracking = "frame_to_keyframe";
+  double keyframe_translation = 0.05;   // m
+  double keyframe_rotation_deg = 5.0;   // deg
+  bool segmentation = true;          // false: the plain robust odometry (--no-segmentation)
+  int max_iterations = 8;            // segmentation <-> odometry rounds at most (paper, Table III)
+  double converged_translation = 0.0005;  // m: the loop stops when a round moves the pose less
+  double converged_rotation_deg = 0.05;   // deg: ... and rotates it less than this
+  int segmentation_level = 1;        // pyramid level of clusters and residuals (1 = half size)
+  float mask_threshold = 0.5f;       // pixels with b above it are written as dynamic
+  // Weights of the first odometry of a frame come from the previous frame's scores, so a moving
+  // object seen before does not pull the initial estimate (off: the paper's unweighted Eq. 1).
+  bool carry_scores = true;
+  bool fusion = true;                // build the static map (needed for frame_to_model)
+  // Start each frame's odometry from the previous frame's motion (else from no motion).
+  bool constant_velocity = true;
+  // Report each pose at the colour image's time, moved from the depth image's time along the
+  // last motion (TUM's colour and depth are up to 20 ms apart).
+  bool shift_to_colour_time = true;
+  double model_min_valid_fraction = 0.5;  // of the current frame's depth pixels the prediction
+                                          // must cover for frame_to_model to be used
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
+                                                keyframe_rotation_deg, segmentation, max_iterations,
+                                                converged_translation, converged_rotation_deg, segmentation_level,
+                                                mask_threshold, carry_scores, fusion, constant_velocity,
+                                                shift_to_colour_time,
+                                                model_min_valid_fraction)
+
+struct SystemConfig {
+  PipelineOptions pipeline;
+  OdometryConfig odometry;
+  FlowConfig flow;
+  ClusteringConfig clustering;
+  ScoreConfig scores;
+  FusionConfig fusion;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry, flow, clustering, scores, fusion)
+// Throws InputError naming the first bad setting.
+void validate(const SystemConfig& config);
+
+struct FrameResult {
+  double timestamp = 0;
+  SE3 T_world_cam = SE3::Identity();
+  bool tracking_ok = true;
+  std::string message;          // what the tracker did when it did not simply succeed
+  bool used_model = false;      // aligned to the map prediction
+  int iterations = 0;           // segmentation rounds
+  cv::Mat dynamic_mask;         // CV_8U, input size, 255 = dynamic, in this frame's pixels
+  cv::Mat scores;               // CV_32F b per pixel at the segmentation level (empty when off)
+};
+
+class FlowFusionSystem {
+ public:
+  FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera,
+                   const SE3& T_world_first = SE3::Identity());
+  ~FlowFusionSystem();
+
+  // Processes the next frame (in time order) and returns its pose and mask. Stage times are added
+  // to timings() under "odometry", "flow", "clustering", "scores", "prediction", "fusion".
+  FrameResult process(const RgbdFrame& frame);
+
+  const Trajectory& trajectory() const { return trajectory_; }
+  const StaticMap* map() const { return map_.get(); }
+  eval::Timings& timings() { return timings_; }
+  const SystemConfig& config() const { return config_; }
+  int trackingFailures() const { return failures_; }
+
+ private:
+  struct Previous;
+  SystemConfig config_;
+  CameraIntrinsics camera_;
+  DenseOdometry odometry_;
+  std::unique_ptr<OpticalFlow> flow_;
+  std::unique_ptr<Clusterer> clusterer_;
+  std::unique_ptr<StaticMap> map_;
+  std::unique_ptr<Previous> prev_;
+  std::unique_ptr<Previous> keyframe_;
+  SE3 T_world_first_;
+  SE3 T_prev_cur_velocity_ = SE3::Identity();  // last frame-to-frame motion, the next guess
+  double velocity_dt_ = 0;                      // s, the time that motion took
+  Trajectory trajectory_;
+  eval::Timings timings_;
+  int failures_ = 0;
+};
+
+}  // namespace ff
