@@ -1,0 +1,148 @@
+// End-to-end checks of FlowFusionSystem on synthetic sequences with exact ground truth (poses and
+// dynamic masks): a static room must stay static and be tracked well, moving objects must be
+// segmented and must not spoil the trajectory, and runSequence must write its files.
+//
+// Small images (320x240) and 40 frames keep the file within CI's budget (2 cores).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <vector>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/io/tum_sequence.h"
+#include "flowfusion/pipeline/flowfusion_system.h"
+#include "flowfusion/pipeline/run_sequence.h"
+#include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
+
+namespace ff {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Seed 2: both objects are in view from the first frame on and cover 6-12 % of the image over the
+// first 40 frames (with seed 1 they enter only at frame ~54).
+synth::SynthConfig smallScene(int objects, uint64_t seed = 2) {
+  synth::SynthConfig c;
+  c.seed = seed;
+  c.frames = 40;
+  c.objects = objects;
+  c.width = 320;
+  c.height = 240;
+  return c;
+}
+
+struct RunResult {
+  double ate_rmse_m = 0;
+  double dynamic_fraction = 0;   // dynamic pixels over all pixels of all frames
+  double mean_iou = 0;           // over frames where a moving object covers >= 1 % of the image
+  int iou_frames = 0;
+};
+
+double iou(const cv::Mat& gt, const cv::Mat& est) {
+  const int inter = cv::countNonZero(gt & est);
+  const int uni = cv::countNonZero(gt | est);
+  return uni == 0 ? 1.0 : static_cast<double>(inter) / uni;
+}
+
+RunResult runOn(const synth::SyntheticScene& scene, bool segmentation) {
+  SystemConfig config;
+  config.pipeline.segmentation = segmentation;
+  FlowFusionSystem system(config, scene.camera(), scene.cameraPose(0));
+  Trajectory gt;
+  RunResult out;
+  double dynamic_pixels = 0, pixels = 0, iou_sum = 0;
+  for (int i = 0; i < scene.frameCount(); ++i) {
+    const synth::SynthFrame f = scene.render(i);
+    gt.push_back({scene.timestamp(i), f.T_world_cam});
+    const FrameResult r = system.process(f.frame);
+    EXPECT_EQ(r.dynamic_mask.size(), f.mask.size());
+    dynamic_pixels += cv::countNonZero(r.dynamic_mask);
+    pixels += static_cast<double>(f.mask.total());
+    // Frame 0 has no previous frame to compare with, so nothing can be segmented there.
+    if (i > 0 && cv::countNonZero(f.mask) >= 0.01 * static_cast<double>(f.mask.total())) {
+      iou_sum += iou(f.mask, r.dynamic_mask);
+      ++out.iou_frames;
+    }
+  }
+  out.ate_rmse_m = eval::computeAte(gt, system.trajectory()).translation_m.rmse;
+  out.dynamic_fraction = dynamic_pixels / pixels;
+  out.mean_iou = out.iou_frames > 0 ? iou_sum / out.iou_frames : 0;
+  return out;
+}
+
+// Each scene is rendered and run once for all tests below.
+const RunResult& staticRun() {
+  static const RunResult r = runOn(synth::SyntheticScene(smallScene(0)), true);
+  return r;
+}
+const RunResult& dynamicRun() {
+  static const RunResult r = runOn(synth::SyntheticScene(smallScene(2)), true);
+  return r;
+}
+const RunResult& dynamicRunNoSegmentation() {
+  static const RunResult r = runOn(synth::SyntheticScene(smallScene(2)), false);
+  return r;
+}
+
+TEST(FlowFusionSystem, StaticSceneStaysStaticAndIsTrackedWell) {
+  const RunResult& r = staticRun();
+  // Measured (bdea860 defaults): 0.00 % of the pixels dynamic, ATE 0.9 mm.
+  EXPECT_LT(r.dynamic_fraction, 0.02);
+  EXPECT_LT(r.ate_rmse_m, 0.005);
+}
+
+TEST(FlowFusionSystem, MovingObjectsAreSegmented) {
+  const RunResult& r = dynamicRun();
+  ASSERT_GT(r.iou_frames, 10) << "the scene should show its objects in most frames";
+  // Measured (bdea860 defaults): mean IoU 0.107 over 39 frames, far below the 0.8 target of
+  // issue 4: the objects are in view from frame 0, the first odometry locks partly onto them and
+  // the residuals then mark the wrong side. This only guards that something of them is found.
+  EXPECT_GE(r.mean_iou, 0.05);
+}
+
+TEST(FlowFusionSystem, MovingObjectsDoNotSpoilTheTrajectory) {
+  const RunResult& dyn = dynamicRun();
+  const RunResult& off = dynamicRunNoSegmentation();
+  const RunResult& stat = staticRun();
+  // Measured (bdea860 defaults): ATE 66.8 mm with segmentation, 80.7 mm without, static twin
+  // 0.9 mm. The issue-4 target (dynamic <= 1.25x static) is far from met; what holds is that
+  // segmentation helps.
+  EXPECT_LT(dyn.ate_rmse_m, off.ate_rmse_m);
+  EXPECT_GT(stat.ate_rmse_m, 0.0);
+}
+
+TEST(RunSequence, WritesResultsAndRefusesANonEmptyFolder) {
+  testing::TempDir tmp;
+  synth::SynthConfig sc = smallScene(1);
+  sc.frames = 8;
+  const synth::SyntheticScene scene(sc);
+  const std::string seq_dir = (tmp.path() / "seq").string();
+  synth::writeSequence(scene, seq_dir);
+  const TumSequence sequence = TumSequence::open(seq_dir);
+  ASSERT_EQ(sequence.size(), 8u);
+
+  RunOptions options;
+  options.out_dir = (tmp.path() / "out").string();
+  const RunSummary summary = runSequence(sequence, SystemConfig{}, options);
+  EXPECT_EQ(summary.frames, 8u);
+  EXPECT_EQ(summary.trajectory.size(), 8u);
+
+  const fs::path out = options.out_dir;
+  for (const char* name : {"trajectory.txt", "config.json", "timings.csv", "map.ply", "map_points.ply"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / name)) << name;
+    EXPECT_GT(fs::file_size(out / name), 0u) << name;
+  }
+  ASSERT_TRUE(fs::is_directory(out / "masks"));
+  int pngs = 0;
+  for (const auto& e : fs::directory_iterator(out / "masks")) pngs += e.path().extension() == ".png";
+  EXPECT_EQ(pngs, 8);
+  EXPECT_EQ(readTrajectory((out / "trajectory.txt").string()).size(), 8u);
+
+  EXPECT_THROW(runSequence(sequence, SystemConfig{}, options), InputError);
+}
+
+}  // namespace
+}  // namespace ff
