@@ -1,0 +1,252 @@
+// Dense odometry against exact synthetic frames: a frame rendered at T_world_ref and one at
+// T_world_cur = T_world_ref * delta must give T_cur_ref = T_world_cur^-1 T_world_ref = delta^-1.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "flowfusion/core/error.h"
+#include "flowfusion/odometry/dense_odometry.h"
+#include "flowfusion/synth/synthetic_scene.h"
+
+namespace ff {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+SE3 motion(const Eigen::Vector3d& t_m, const Eigen::Vector3d& axis_angle_rad) {
+  Vector6d xi;
+  xi << t_m, axis_angle_rad;
+  return expSE3(xi);
+}
+
+struct Error {
+  double translation_m;
+  double rotation_deg;
+};
+Error poseError(const SE3& estimate, const SE3& truth) {
+  const SE3 d = estimate * truth.inverse();
+  return {translationNorm(d), rotationAngleDeg(d)};
+}
+
+bool allFinite(const SE3& T) { return T.matrix().allFinite(); }
+
+class DenseOdometryTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    synth::SynthConfig c;
+    c.noise = false;
+    c.objects = 0;
+    c.width = 320;
+    c.height = 240;
+    c.frames = 60;
+    scene_ = std::make_unique<synth::SyntheticScene>(c);
+    synth::SynthConfig noisy = c;
+    noisy.noise = true;
+    noisy_scene_ = std::make_unique<synth::SyntheticScene>(noisy);
+  }
+  static void TearDownTestSuite() {
+    scene_.reset();
+    noisy_scene_.reset();
+  }
+
+  static OdometryConfig config() {
+    OdometryConfig c;
+    c.finest_level = 0;  // 320x240 input: level 1 would be 160x120
+    return c;
+  }
+  static OdometryFrame prepare(const RgbdFrame& f, const OdometryConfig& c) {
+    return prepareOdometryFrame(f.intensity, f.depth, scene_->camera(), c);
+  }
+  // Estimated T_cur_ref for a current camera at T_world_ref * delta, and its error.
+  static Error estimateDelta(const SE3& delta, const OdometryConfig& c, OdometryResult* out = nullptr,
+                             bool noisy = false) {
+    const auto& scene = noisy ? *noisy_scene_ : *scene_;
+    const SE3 T_world_ref = scene.cameraPose(kRefFrame);
+    const double t = scene.timestamp(kRefFrame);
+    const auto ref = scene.renderAt(T_world_ref, t);
+    const auto cur = scene.renderAt(T_world_ref * delta, t + 1.0 / 30);
+    const DenseOdometry odo(c);
+    const OdometryResult r = odo.estimate(prepare(ref.frame, c), prepare(cur.frame, c));
+    if (out) *out = r;
+    EXPECT_TRUE(r.ok) << r.message;
+    EXPECT_TRUE(allFinite(r.T_cur_ref));
+    return poseError(r.T_cur_ref, delta.inverse());
+  }
+
+  static constexpr int kRefFrame = 20;
+  static inline std::unique_ptr<synth::SyntheticScene> scene_;
+  static inline std::unique_ptr<synth::SyntheticScene> noisy_scene_;
+};
+
+// Recovery of single-axis and combined motions on exact frames. The tolerance is 4 mm, not the
+// sub-millimetre the exact data would allow: the estimate settles 0.2-3.2 mm from the truth
+// (rotation within 0.012 deg) even with 50 iterations per level and for 3 mm motions, although the
+// depth residuals at the true motion are ~5e-7 m (see PixelResidualsVanishAtTheTrueMotion). That
+// bias is an open odometry issue; these bounds catch regressions beyond it.
+TEST_F(DenseOdometryTest, RecoversKnownMotions) {
+  const std::vector<std::pair<const char*, SE3>> cases = {
+      {"tx +3 cm", motion({0.03, 0, 0}, {0, 0, 0})},
+      {"ty -3 cm", motion({0, -0.03, 0}, {0, 0, 0})},
+      {"tz +4 cm", motion({0, 0, 0.04}, {0, 0, 0})},
+      {"rx 2 deg", motion({0, 0, 0}, {2 * kDeg, 0, 0})},
+      {"ry -3 deg", motion({0, 0, 0}, {0, -3 * kDeg, 0})},
+      {"rz 3 deg", motion({0, 0, 0}, {0, 0, 3 * kDeg})},
+      {"combined", motion({0.02, -0.015, 0.025}, {1.5 * kDeg, -2 * kDeg, 1 * kDeg})},
+  };
+  for (const auto& [name, delta] : cases) {
+    const Error e = estimateDelta(delta, config());
+    EXPECT_LT(e.translation_m, 0.004) << name;
+    EXPECT_LT(e.rotation_deg, 0.05) << name;
+    std::printf("[ measured ] %-10s translation error %.3e m, rotation error %.3e deg\n", name, e.translation_m,
+                e.rotation_deg);
+  }
+}
+
+// The default finest_level = 1 (160x120 for this input) is coarser: 4.6 mm measured.
+TEST_F(DenseOdometryTest, DefaultFinestLevelIsAccurate) {
+  const Error e = estimateDelta(motion({0.02, -0.015, 0.025}, {1.5 * kDeg, -2 * kDeg, 1 * kDeg}), OdometryConfig{});
+  std::printf("[ measured ] finest_level 1: %.3e m, %.3e deg\n", e.translation_m, e.rotation_deg);
+  EXPECT_LT(e.translation_m, 0.007);
+  EXPECT_LT(e.rotation_deg, 0.1);
+}
+
+TEST_F(DenseOdometryTest, IdenticalFramesGiveIdentity) {
+  const auto c = config();
+  const auto f = scene_->render(kRefFrame);
+  const OdometryFrame a = prepare(f.frame, c);
+  const OdometryResult r = DenseOdometry(c).estimate(a, a);
+  ASSERT_TRUE(r.ok) << r.message;
+  const Error e = poseError(r.T_cur_ref, SE3::Identity());
+  EXPECT_LT(e.translation_m, 1e-6);
+  EXPECT_LT(e.rotation_deg, 1e-6 / kDeg);
+}
+
+TEST_F(DenseOdometryTest, NoisyFramesStayAccurate) {
+  const SE3 delta = motion({0.02, -0.015, 0.025}, {1.5 * kDeg, -2 * kDeg, 1 * kDeg});
+  const Error e = estimateDelta(delta, config(), nullptr, /*noisy=*/true);
+  std::printf("[ measured ] noisy: %.3e m, %.3e deg\n", e.translation_m, e.rotation_deg);
+  EXPECT_LT(e.translation_m, 0.005);
+  EXPECT_LT(e.rotation_deg, 0.3);
+}
+
+TEST_F(DenseOdometryTest, BlankAndDepthlessFramesFailWithoutNaN) {
+  const auto c = config();
+  const auto& cam = scene_->camera();
+  const auto real = scene_->render(kRefFrame);
+  const OdometryFrame good = prepare(real.frame, c);
+  const cv::Mat zero_depth = cv::Mat::zeros(cam.height, cam.width, CV_32F);
+  const OdometryFrame blank =
+      prepareOdometryFrame(cv::Mat(cam.height, cam.width, CV_32F, cv::Scalar(0.5)), zero_depth, cam, c);
+  const OdometryFrame depthless = prepareOdometryFrame(real.frame.intensity, zero_depth, cam, c);
+  const SE3 guess = motion({0.01, 0.02, -0.01}, {0.01, -0.02, 0.005});
+  const DenseOdometry odo(c);
+  const std::vector<std::pair<const char*, OdometryResult>> results = {
+      {"blank ref and cur", odo.estimate(blank, blank, guess)},
+      {"depthless ref", odo.estimate(depthless, good, guess)},
+      {"blank ref", odo.estimate(blank, good, guess)},
+  };
+  for (const auto& [name, r] : results) {
+    EXPECT_FALSE(r.ok) << name;
+    EXPECT_FALSE(r.message.empty()) << name;
+    EXPECT_TRUE(allFinite(r.T_cur_ref)) << name;
+    EXPECT_TRUE(r.T_cur_ref.isApprox(guess, 1e-12)) << name << ": failure must return the initial guess";
+    EXPECT_TRUE(std::isfinite(r.final_cost)) << name;
+    EXPECT_TRUE(r.hessian.allFinite()) << name;
+  }
+}
+
+TEST_F(DenseOdometryTest, ZeroWeightsOnARegionStillRecoverMotion) {
+  const auto c = config();
+  const SE3 delta = motion({0.02, -0.015, 0.025}, {1.5 * kDeg, -2 * kDeg, 1 * kDeg});
+  const SE3 T_world_ref = scene_->cameraPose(kRefFrame);
+  const double t = scene_->timestamp(kRefFrame);
+  const auto ref = scene_->renderAt(T_world_ref, t);
+  const auto cur = scene_->renderAt(T_world_ref * delta, t + 1.0 / 30);
+  const DenseOdometry odo(c);
+  const OdometryFrame a = prepare(ref.frame, c), b = prepare(cur.frame, c);
+
+  cv::Mat weights(ref.frame.depth.size(), CV_32F, cv::Scalar(1.0f));
+  weights(cv::Rect(0, 0, weights.cols / 2, weights.rows)).setTo(0.0f);
+  const OdometryResult half = odo.estimate(a, b, SE3::Identity(), weights);
+  ASSERT_TRUE(half.ok) << half.message;
+  const Error e = poseError(half.T_cur_ref, delta.inverse());
+  std::printf("[ measured ] left half weight 0: %.3e m, %.3e deg\n", e.translation_m, e.rotation_deg);
+  EXPECT_LT(e.translation_m, 0.004);
+  EXPECT_LT(e.rotation_deg, 0.1);
+
+  const SE3 guess = motion({0.005, 0, 0}, {0, 0, 0});
+  const OdometryResult none = odo.estimate(a, b, guess, cv::Mat::zeros(weights.size(), CV_32F));
+  EXPECT_FALSE(none.ok);
+  EXPECT_FALSE(none.message.empty());
+  EXPECT_TRUE(none.T_cur_ref.isApprox(guess, 1e-12));
+}
+
+TEST_F(DenseOdometryTest, InvalidConfigsThrow) {
+  const auto expectThrowNaming = [](OdometryConfig c, const std::string& setting) {
+    try {
+      DenseOdometry odo(c);
+      ADD_FAILURE() << setting << ": no InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(setting), std::string::npos) << e.what();
+    }
+  };
+  OdometryConfig c;
+  c.levels = 0;
+  expectThrowNaming(c, "odometry.levels");
+  c = {};
+  c.finest_level = c.levels;
+  expectThrowNaming(c, "odometry.finest_level");
+  c = {};
+  c.finest_level = -1;
+  expectThrowNaming(c, "odometry.finest_level");
+  c = {};
+  c.sigma_I = 0;
+  expectThrowNaming(c, "odometry.sigma_I");
+  c = {};
+  c.sigma_I = -0.1;
+  expectThrowNaming(c, "odometry.sigma_I");
+  EXPECT_NO_THROW(DenseOdometry(OdometryConfig{}));
+}
+
+TEST_F(DenseOdometryTest, Deterministic) {
+  const auto c = config();
+  const SE3 delta = motion({0.02, -0.015, 0.025}, {1.5 * kDeg, -2 * kDeg, 1 * kDeg});
+  OdometryResult r1, r2;
+  estimateDelta(delta, c, &r1);
+  estimateDelta(delta, c, &r2);
+  EXPECT_EQ(0, std::memcmp(r1.T_cur_ref.matrix().data(), r2.T_cur_ref.matrix().data(), sizeof(double) * 16));
+  EXPECT_EQ(r1.iterations, r2.iterations);
+  EXPECT_EQ(r1.valid_pixels, r2.valid_pixels);
+  EXPECT_EQ(r1.final_cost, r2.final_cost);
+}
+
+TEST_F(DenseOdometryTest, PixelResidualsVanishAtTheTrueMotion) {
+  const auto c = config();
+  const SE3 delta = motion({0.02, 0, 0.01}, {0, 1 * kDeg, 0});
+  const SE3 T_world_ref = scene_->cameraPose(kRefFrame);
+  const double t = scene_->timestamp(kRefFrame);
+  const OdometryFrame a = prepare(scene_->renderAt(T_world_ref, t).frame, c);
+  const OdometryFrame b = prepare(scene_->renderAt(T_world_ref * delta, t + 1.0 / 30).frame, c);
+  const auto median = [](const cv::Mat& m) {
+    std::vector<float> v;
+    for (int y = 0; y < m.rows; ++y)
+      for (int x = 0; x < m.cols; ++x)
+        if (std::isfinite(m.at<float>(y, x))) v.push_back(m.at<float>(y, x));
+    EXPECT_GT(v.size(), m.total() / 2);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const PixelResiduals at_truth = computePixelResiduals(a, b, delta.inverse(), 0, c);
+  const PixelResiduals at_identity = computePixelResiduals(a, b, SE3::Identity(), 0, c);
+  EXPECT_LT(median(at_truth.abs_depth), 0.001);
+  EXPECT_LT(median(at_truth.abs_depth), median(at_identity.abs_depth));
+  EXPECT_LT(median(at_truth.abs_intensity), median(at_identity.abs_intensity));
+}
+
+}  // namespace
+}  // namespace ff
