@@ -109,9 +109,11 @@ TEST(FlowFusionSystem, MovingObjectsDoNotSpoilTheTrajectory) {
   const RunResult& stat = staticRun();
   // Measured (bdea860 defaults): ATE 66.8 mm with segmentation, 80.7 mm without, static twin
   // 0.9 mm. The issue-4 target (dynamic <= 1.25x static) is far from met; what holds is that
-  // segmentation helps.
+  // segmentation helps. The objects' score deltas (~0.1-0.2 at 0.5 m/s) sit below theta_b = 0.15,
+  // which was set from real fr1 static residuals; with theta (0.03, 0.1) this scene reaches
+  // 8.7 mm, but the real static fr1 frames then degrade from 14.8 to 62 mm (see issue 4 report).
   EXPECT_LT(dyn.ate_rmse_m, off.ate_rmse_m);
-  EXPECT_GT(stat.ate_rmse_m, 0.0);
+  EXPECT_LT(stat.ate_rmse_m, dyn.ate_rmse_m);
 }
 
 TEST(RunSequence, WritesResultsAndRefusesANonEmptyFolder) {
