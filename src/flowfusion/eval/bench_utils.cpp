@@ -132,6 +132,17 @@ std::vector<double> Timings::samples(const std::string& stage) const {
 double Timings::medianMs(const std::string& stage) const { return median(samples(stage)); }
 double Timings::meanMs(const std::string& stage) const { return mean(samples(stage)); }
 
+std::vector<double> Timings::frameTotals() const {
+  std::vector<double> totals;
+  for (const Row& r : rows_) {
+    double sum = 0;
+    for (double ms : r.ms)
+      if (!std::isnan(ms)) sum += ms;
+    totals.push_back(sum);
+  }
+  return totals;
+}
+
 nlohmann::json Timings::toJson() const {
   nlohmann::json j;
   j["stages"] = nlohmann::json::object();

@@ -48,6 +48,8 @@ class Timings {
   std::vector<double> samples(const std::string& stage) const;
   double medianMs(const std::string& stage) const;
   double meanMs(const std::string& stage) const;
+  // Each frame's time summed over its stages.
+  std::vector<double> frameTotals() const;
 
   // {"stages": {name: {"median_ms", "mean_ms", "frames"}}, "frames": [{"timestamp", name: ms}]}.
   nlohmann::json toJson() const;

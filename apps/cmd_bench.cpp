@@ -1,0 +1,147 @@
+// `flowfusion bench SEQUENCE...`: accuracy, speed and memory of the system next to the plain
+// odometry and OpenCV's odometry, measured on the same frames in the same run.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "command.h"
+#include "flowfusion/core/error.h"
+#include "flowfusion/eval/reference_odometry.h"
+#include "flowfusion/eval/segmentation_metrics.h"
+#include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/pipeline/run_sequence.h"
+#include "sequence_options.h"
+
+namespace fs = std::filesystem;
+
+namespace ff::app {
+namespace {
+
+struct BenchCommand {
+  std::vector<std::string> sequences;
+  std::string out;
+  bool no_reference = false;
+  SystemOptions system;
+};
+
+// The columns of one row; NaN prints as "-".
+struct Row {
+  std::string sequence, method;
+  size_t frames = 0;
+  double ate = NAN, rpe_t = NAN, rpe_r = NAN, total_ms = NAN;
+  std::vector<double> stage_ms;
+  double iou = NAN, precision = NAN, recall = NAN, peak_mib = NAN;
+};
+
+const std::vector<std::string> kStages = {"odometry", "flow", "clustering", "scores", "prediction", "fusion"};
+
+void addTrajectoryErrors(Row& row, const TumSequence& seq, const Trajectory& est) {
+  if (!seq.groundtruth()) return;
+  row.ate = eval::computeAte(*seq.groundtruth(), est).translation_m.rmse;
+  try {
+    const auto rpe = eval::computeRpe(*seq.groundtruth(), est);
+    row.rpe_t = rpe.translation_rmse_m_per_s;
+    row.rpe_r = rpe.rotation_rmse_deg_per_s;
+  } catch (const InputError&) {
+    // Shorter than the 1 s RPE interval: no RPE to report.
+  }
+}
+
+Row runOurs(const TumSequence& seq, const std::string& label, const std::string& method, SystemConfig config,
+            const BenchCommand& c, const fs::path& out_root) {
+  RunOptions o;
+  o.out_dir = (out_root / label / method).string();
+  o.overwrite = true;
+  o.export_map = false;
+  if (!c.system.frames.empty()) o.frames = parseFrameRange(c.system.frames);
+  const RunSummary s = runSequence(seq, config, o);
+  Row row{label, method, s.frames};
+  addTrajectoryErrors(row, seq, s.trajectory);
+  row.total_ms = eval::median(s.timings.frameTotals());
+  for (const auto& stage : kStages)
+    row.stage_ms.push_back(s.timings.samples(stage).empty() ? NAN : s.timings.medianMs(stage));
+  if (const auto gt_masks = seq.masksDir(); gt_masks && config.pipeline.segmentation) {
+    const auto seg = eval::evaluateSegmentation(*gt_masks, (fs::path(o.out_dir) / "masks").string());
+    row.iou = seg.mean_iou;
+    row.precision = seg.mean_precision;
+    row.recall = seg.mean_recall;
+  }
+  row.peak_mib = eval::peakResidentMiB();
+  return row;
+}
+
+Row runReference(const TumSequence& seq, const std::string& label, const std::string& kind, const BenchCommand& c) {
+  std::optional<size_t> max_frames;
+  if (!c.system.frames.empty()) {
+    const FrameRange r = parseFrameRange(c.system.frames);
+    if (r.first != 0) throw InputError("bench: --frames must start at 0 when the OpenCV columns run (or pass --no-reference)");
+    if (r.last >= 0) max_frames = static_cast<size_t>(r.last) + 1;
+  }
+  const eval::ReferenceRun run = eval::runReferenceOdometry(kind, seq, max_frames);
+  Row row{label, kind == "rgbd" ? "opencv-RgbdOdometry" : "opencv-RgbdICPOdometry", run.trajectory.size()};
+  addTrajectoryErrors(row, seq, run.trajectory);
+  row.total_ms = run.median_ms;
+  row.stage_ms.assign(kStages.size(), NAN);
+  row.stage_ms[0] = run.median_ms;
+  row.peak_mib = eval::peakResidentMiB();
+  return row;
+}
+
+void execute(const BenchCommand& c) {
+  const SystemConfig config = c.system.systemConfig();
+  const bool keep = !c.out.empty();
+  const fs::path out_root = keep ? fs::path(c.out) : fs::temp_directory_path() / ("flowfusion_bench_" + std::to_string(getpid()));
+  if (keep) prepareOutputDir(c.out, false);
+  std::vector<Row> rows;
+  for (const auto& dir : c.sequences) {
+    const TumSequence seq = TumSequence::open(dir, c.system.sequenceOptions());
+    const std::string label = fs::path(dir).filename().empty() ? fs::path(dir).parent_path().filename().string()
+                                                               : fs::path(dir).filename().string();
+    std::fprintf(stderr, "bench: %s ...\n", label.c_str());
+    rows.push_back(runOurs(seq, label, "flowfusion", config, c, out_root));
+    SystemConfig plain = config;
+    plain.pipeline.segmentation = false;
+    plain.pipeline.fusion = false;
+    if (plain.pipeline.tracking == "frame_to_model") plain.pipeline.tracking = "frame_to_keyframe";
+    rows.push_back(runOurs(seq, label, "odometry-only", plain, c, out_root));
+    if (!c.no_reference) {
+      rows.push_back(runReference(seq, label, "rgbd", c));
+      rows.push_back(runReference(seq, label, "icp", c));
+    }
+  }
+  if (!keep) fs::remove_all(out_root);
+
+  std::vector<std::string> headers = {"sequence", "method", "frames", "ATE_m", "RPE_m/s", "RPE_deg/s", "ms/frame", "fps"};
+  for (const auto& s : kStages) headers.push_back(s + "_ms");
+  for (const char* h : {"mIoU", "precision", "recall", "peak_MiB"}) headers.push_back(h);
+  eval::TextTable table(headers);
+  using T = eval::TextTable;
+  for (const Row& r : rows) {
+    std::vector<std::string> cells = {r.sequence, r.method, std::to_string(r.frames), T::num(r.ate, 4), T::num(r.rpe_t, 4),
+                                      T::num(r.rpe_r, 3), T::num(r.total_ms, 1), T::num(1000.0 / r.total_ms, 1)};
+    for (double ms : r.stage_ms) cells.push_back(T::num(ms, 1));
+    for (double v : {r.iou, r.precision, r.recall}) cells.push_back(T::num(v, 3));
+    cells.push_back(T::num(r.peak_mib, 0));
+    table.addRow(cells);
+  }
+  std::printf("%s", table.str().c_str());
+  std::printf("ms columns: medians over frames, wall time, %d threads. ms/frame: whole pipeline without image loading.\n"
+              "OpenCV rows: frame to frame, library defaults; their odometry_ms is the whole call. peak_MiB: process "
+              "peak resident memory so far (rows run in order).\n",
+              cv::getNumThreads());
+}
+
+const RegisterCommand reg("3-bench", [](CLI::App& app) {
+  auto c = std::make_shared<BenchCommand>();
+  CLI::App* cmd = app.add_subcommand("bench", "Accuracy, speed and memory table next to OpenCV's odometry");
+  cmd->add_option("sequences", c->sequences, "Sequence folders (TUM layout)")->required();
+  cmd->add_option("--out", c->out, "Keep each run's outputs in this new folder");
+  cmd->add_flag("--no-reference", c->no_reference, "Skip the OpenCV odometry rows");
+  c->system.addTo(cmd);
+  cmd->callback([c]() { execute(*c); });
+});
+
+}  // namespace
+}  // namespace ff::app
