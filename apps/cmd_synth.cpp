@@ -7,33 +7,13 @@
 #include "command.h"
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/pipeline/run_sequence.h"
 #include "flowfusion/synth/synthetic_scene.h"
 
 namespace {
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-// "FIRST:LAST" (inclusive colour frame indices; either side may be empty).
-void parseFrameRange(const std::string& spec, ff::synth::AugmentConfig& c) {
-  const auto colon = spec.find(':');
-  const auto bad = [&] { return ff::InputError("--frames: '" + spec + "' is not FIRST:LAST (frame indices)"); };
-  if (colon == std::string::npos) throw bad();
-  const auto num = [&](const std::string& s, int fallback) {
-    if (s.empty()) return fallback;
-    size_t used = 0;
-    int v = 0;
-    try {
-      v = std::stoi(s, &used);
-    } catch (const std::exception&) {
-      throw bad();
-    }
-    if (used != s.size() || v < 0) throw bad();
-    return v;
-  };
-  c.first_frame = num(spec.substr(0, colon), 0);
-  c.last_frame = num(spec.substr(colon + 1), -1);
 }
 
 const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
@@ -100,7 +80,11 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
   cmd->callback([o] {
     ff::synth::AugmentConfig defaults = o->config;
     if (o->no_noise) defaults.noise = false;
-    if (!o->frames.empty()) parseFrameRange(o->frames, defaults);
+    if (!o->frames.empty()) {
+      const ff::FrameRange range = ff::parseFrameRange(o->frames);
+      defaults.first_frame = range.first;
+      defaults.last_frame = range.last;
+    }
     const auto config = ff::resolveConfig(defaults, o->config_file, o->overrides);
     const auto t0 = std::chrono::steady_clock::now();
     const auto report = ff::synth::augmentSequence(o->input, o->out, config, o->sequence, o->overwrite);
