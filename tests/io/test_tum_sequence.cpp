@@ -103,15 +103,6 @@ TEST(TumSequence, DepthScaleOption) {
   EXPECT_NEAR(fr.depth.at<float>(0, 0), 5.0f, 1e-6);
 }
 
-TEST(TumSequence, AssociationNearestWithinLimitEachDepthOnce) {
-  // Colour 1.00 and 1.01 both nearest to depth 1.004: the closer (1.00) wins, 1.01 takes 1.025.
-  const auto pairs = associate({1.00, 1.01, 1.50}, {0.90, 1.004, 1.025, 1.53}, 0.02);
-  ASSERT_EQ(pairs.size(), 2u);
-  EXPECT_EQ(pairs[0], std::make_pair(size_t{0}, size_t{1}));
-  EXPECT_EQ(pairs[1], std::make_pair(size_t{1}, size_t{2}));
-  EXPECT_TRUE(associate({1.0}, {1.03}, 0.02).empty());
-}
-
 TEST(TumSequence, MissingRgbTxt) {
   testing::TempDir tmp;
   Folder f(tmp.path() / "seq");
@@ -219,10 +210,12 @@ TEST(TumSequence, CameraOptionOverrides) {
 TEST(TumSequence, BadCameraFile) {
   testing::TempDir tmp;
   Folder f(tmp.path() / "seq");
-  writeText(f.root / "camera.txt", "50 51 31.5\n");
-  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt"});
+  writeText(f.root / "camera.txt", "# fx fy cx cy w h\n50 51 31.5\n");
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:2", "fx fy cx cy width height", "50 51 31.5"});
   writeText(f.root / "camera.txt", "0 51 31.5 23.5 64 48\n");
-  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt", "positive"});
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "positive"});
+  writeText(f.root / "camera.txt", "# nothing\n");
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt", "no intrinsics"});
 }
 
 TEST(TumSequence, WriterRoundTrip) {

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
-#include <tuple>
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/io/tum_text.h"
 
 namespace ff::eval {
 
@@ -74,27 +74,7 @@ ErrorStats errorStats(const std::vector<double>& errors) {
 
 std::vector<std::pair<size_t, size_t>> associateStamps(const std::vector<double>& a, const std::vector<double>& b,
                                                        double max_diff_s) {
-  // Sorted inputs: the candidates of a_i lie in a window of b. Sorting the candidates by
-  // (difference, a, b) is associate.py's sort of (diff, stamp_a, stamp_b) tuples.
-  std::vector<std::tuple<double, size_t, size_t>> cand;
-  size_t lo = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    while (lo < b.size() && b[lo] <= a[i] - max_diff_s) ++lo;
-    for (size_t j = lo; j < b.size() && b[j] < a[i] + max_diff_s; ++j) {
-      const double d = std::abs(a[i] - b[j]);
-      if (d < max_diff_s) cand.emplace_back(d, i, j);
-    }
-  }
-  std::sort(cand.begin(), cand.end());
-  std::vector<char> used_a(a.size(), 0), used_b(b.size(), 0);
-  std::vector<std::pair<size_t, size_t>> out;
-  for (const auto& [d, i, j] : cand) {
-    if (used_a[i] || used_b[j]) continue;
-    used_a[i] = used_b[j] = 1;
-    out.emplace_back(i, j);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  return associate(a, b, max_diff_s, StampLimit::kExclusive);
 }
 
 void to_json(nlohmann::json& j, const AteResult& r) {

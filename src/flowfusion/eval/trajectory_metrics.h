@@ -19,8 +19,8 @@ struct ErrorStats {
 ErrorStats errorStats(const std::vector<double>& errors);
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ErrorStats, rmse, mean, median, std, min, max)
 
-// associate.py: every pair (i, j) with |a_i - b_j| strictly below max_diff_s, taken greedily by
-// smallest difference (ties: earlier a, then earlier b), each index used once. Sorted by i.
+// The scripts' association (associate.py as evaluate_ate.py uses it): ff::associate with the
+// difference strictly below max_diff_s (StampLimit::kExclusive).
 std::vector<std::pair<size_t, size_t>> associateStamps(const std::vector<double>& a, const std::vector<double>& b,
                                                        double max_diff_s);
 

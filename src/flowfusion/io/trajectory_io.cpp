@@ -4,38 +4,26 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
-#include <sstream>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/io/tum_text.h"
 
 namespace ff {
 
 Trajectory readTrajectory(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open trajectory file");
+  RecordReader in(path, "trajectory file", "timestamp tx ty tz qx qy qz qw");
   Trajectory traj;
-  std::string line;
-  int lineno = 0;
-  while (std::getline(in, line)) {
-    ++lineno;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ss(line);
-    double v[8];
+  while (in.next()) {
+    const double t = in.timestamp();
+    double v[7];
     for (double& x : v)
-      if (!(ss >> x) || !std::isfinite(x))
-        throw InputError(path + ":" + std::to_string(lineno) +
-                         ": expected 'timestamp tx ty tz qx qy qz qw' (8 finite numbers)");
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+      if (!(in.fields() >> x) || !std::isfinite(x)) in.malformed();
+    const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
     if (std::abs(q.norm() - 1.0) > 1e-2)
-      throw InputError(path + ":" + std::to_string(lineno) + ": quaternion is not of unit length (norm " +
-                       std::to_string(q.norm()) + ")");
-    if (!traj.empty() && v[0] <= traj.back().timestamp)
-      throw InputError(path + ":" + std::to_string(lineno) + ": timestamp " + std::to_string(v[0]) +
-                       " is not after the previous one (timestamps must be strictly increasing)");
-    traj.push_back({v[0], poseFromTranslationQuaternion({v[1], v[2], v[3]}, q)});
+      in.fail("quaternion is not of unit length (norm " + std::to_string(q.norm()) + ")");
+    traj.push_back({t, poseFromTranslationQuaternion({v[0], v[1], v[2]}, q)});
   }
-  if (traj.empty()) throw InputError(path + ": trajectory file holds no poses");
+  if (traj.empty()) in.fail("trajectory file holds no poses");
   return traj;
 }
 

@@ -1,7 +1,6 @@
 #include "flowfusion/io/tum_sequence.h"
 
-#include <algorithm>
-#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -10,6 +9,7 @@
 #include <sstream>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/io/tum_text.h"
 
 namespace fs = std::filesystem;
 
@@ -22,72 +22,31 @@ std::string timestampName(double t) {
 }
 
 std::vector<std::pair<double, std::string>> readFileList(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open file list");
+  RecordReader in(path, "file list", "timestamp filename");
   std::vector<std::pair<double, std::string>> out;
-  std::string line;
-  int lineno = 0;
-  while (std::getline(in, line)) {
-    ++lineno;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ss(line);
-    double t;
+  while (in.next()) {
+    const double t = in.timestamp();
     std::string file;
-    if (!(ss >> t) || !(ss >> file) || !std::isfinite(t))
-      throw InputError(path + ":" + std::to_string(lineno) + ": expected 'timestamp filename', got '" + line + "'");
-    if (!out.empty() && t <= out.back().first)
-      throw InputError(path + ":" + std::to_string(lineno) + ": timestamp " + timestampName(t) +
-                       (t == out.back().first ? " is a duplicate" : " is earlier than the previous line") +
-                       " (timestamps must be strictly increasing)");
+    if (!(in.fields() >> file)) in.malformed();
     out.emplace_back(t, file);
   }
-  if (out.empty()) throw InputError(path + ": file list is empty");
-  return out;
-}
-
-std::vector<std::pair<size_t, size_t>> associate(const std::vector<double>& a, const std::vector<double>& b,
-                                                 double max_diff) {
-  // All candidate pairs within max_diff, best first; both lists are sorted so a window suffices.
-  std::vector<std::tuple<double, size_t, size_t>> cand;
-  size_t lo = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    while (lo < b.size() && b[lo] < a[i] - max_diff) ++lo;
-    for (size_t j = lo; j < b.size() && b[j] <= a[i] + max_diff; ++j) cand.emplace_back(std::abs(a[i] - b[j]), i, j);
-  }
-  std::sort(cand.begin(), cand.end());
-  std::vector<char> used_a(a.size(), 0), used_b(b.size(), 0);
-  std::vector<std::pair<size_t, size_t>> out;
-  for (const auto& [d, i, j] : cand) {
-    if (used_a[i] || used_b[j]) continue;
-    used_a[i] = used_b[j] = 1;
-    out.emplace_back(i, j);
-  }
-  std::sort(out.begin(), out.end());
+  if (out.empty()) in.fail("file list is empty");
   return out;
 }
 
 CameraIntrinsics readCameraFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open camera file");
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ss(line);
-    std::string word;
-    ss >> word;
-    if (word == "fr1" || word == "fr2" || word == "fr3") return parseCamera(word, path);
-    std::istringstream nums(line);
-    double v[6];
-    for (double& x : v)
-      if (!(nums >> x))
-        throw InputError(path + ": expected 'fx fy cx cy width height' or fr1|fr2|fr3, got '" + line + "'");
-    CameraIntrinsics c{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
-    if (!c.valid()) throw InputError(path + ": focal lengths and image size must be positive");
-    return c;
-  }
-  throw InputError(path + ": camera file holds no intrinsics");
+  RecordReader in(path, "camera file", "fx fy cx cy width height', or 'fr1|fr2|fr3");
+  if (!in.next()) in.fail("camera file holds no intrinsics");
+  std::string word;
+  in.fields() >> word;
+  if (word == "fr1" || word == "fr2" || word == "fr3") return parseCamera(word, path);
+  std::istringstream nums(in.line());
+  double v[6];
+  for (double& x : v)
+    if (!(nums >> x)) in.malformed();
+  CameraIntrinsics c{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
+  if (!c.valid()) in.fail("focal lengths and image size must be positive");
+  return c;
 }
 
 void writeCameraFile(const std::string& path, const CameraIntrinsics& c) {
@@ -125,7 +84,7 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
   std::vector<double> ta, tb;
   for (const auto& e : rgb) ta.push_back(e.first);
   for (const auto& e : depth) tb.push_back(e.first);
-  const auto pairs = associate(ta, tb, options.max_time_diff);
+  const auto pairs = associate(ta, tb, options.max_time_diff, StampLimit::kInclusive);
   if (pairs.empty())
     throw InputError(dir + ": no colour frame has a depth frame within " + std::to_string(options.max_time_diff) +
                      " s (check the timestamps in rgb.txt and depth.txt)");

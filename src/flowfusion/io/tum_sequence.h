@@ -30,11 +30,6 @@ struct FrameEntry {
 // on malformed lines, unsorted or duplicate timestamps, or an empty list.
 std::vector<std::pair<double, std::string>> readFileList(const std::string& path);
 
-// Associates each colour timestamp with the nearest depth timestamp within max_diff, each depth
-// used at most once (greedy by time difference, as associate.py). Returns index pairs.
-std::vector<std::pair<size_t, size_t>> associate(const std::vector<double>& a, const std::vector<double>& b,
-                                                 double max_diff);
-
 class TumSequence {
  public:
   // Reads the lists and resolves the camera: options.camera, else camera.txt in the folder, else
