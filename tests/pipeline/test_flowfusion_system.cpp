@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iostream>
 #include <vector>
 
 #include "flowfusion/core/error.h"
@@ -96,23 +97,25 @@ TEST(FlowFusionSystem, StaticSceneStaysStaticAndIsTrackedWell) {
 
 TEST(FlowFusionSystem, MovingObjectsAreSegmented) {
   const RunResult& r = dynamicRun();
+  std::cout << "dynamic scene: mean IoU " << r.mean_iou << " over " << r.iou_frames << " frames\n";
   ASSERT_GT(r.iou_frames, 10) << "the scene should show its objects in most frames";
-  // Measured (bdea860 defaults): mean IoU 0.107 over 39 frames, far below the 0.8 target of
-  // issue 4: the objects are in view from frame 0, the first odometry locks partly onto them and
-  // the residuals then mark the wrong side. This only guards that something of them is found.
-  EXPECT_GE(r.mean_iou, 0.05);
+  // Measured: mean IoU 0.70 over 39 frames (0.107 before the static-model term of ScoreConfig),
+  // below the 0.8 target of issue 4: the objects are in view from frame 0, so the map starts with
+  // them and their first frames are only found by their moving edges.
+  EXPECT_GE(r.mean_iou, 0.5);
 }
 
 TEST(FlowFusionSystem, MovingObjectsDoNotSpoilTheTrajectory) {
   const RunResult& dyn = dynamicRun();
   const RunResult& off = dynamicRunNoSegmentation();
   const RunResult& stat = staticRun();
-  // Measured (bdea860 defaults): ATE 66.8 mm with segmentation, 80.7 mm without, static twin
-  // 0.9 mm. The issue-4 target (dynamic <= 1.25x static) is far from met; what holds is that
-  // segmentation helps. The objects' score deltas (~0.1-0.2 at 0.5 m/s) sit below theta_b = 0.15,
-  // which was set from real fr1 static residuals; with theta (0.03, 0.1) this scene reaches
-  // 8.7 mm, but the real static fr1 frames then degrade from 14.8 to 62 mm (see issue 4 report).
-  EXPECT_LT(dyn.ate_rmse_m, off.ate_rmse_m);
+  std::cout << "ATE mm: dynamic " << 1e3 * dyn.ate_rmse_m << ", without segmentation " << 1e3 * off.ate_rmse_m
+            << ", static twin " << 1e3 * stat.ate_rmse_m << "\n";
+  // Measured: ATE 6.8 mm with segmentation (66.8 mm before the static-model term), 80.7 mm
+  // without, static twin 0.9 mm. The issue-4 target (dynamic <= 1.25x static) is not met on this
+  // scene, whose objects are in view from the first frame; on 150-frame 640x480 sequences it is
+  // (seed 1: 9.8 mm against 9.8 mm for its static twin).
+  EXPECT_LT(dyn.ate_rmse_m, 0.02);
   EXPECT_LT(stat.ate_rmse_m, dyn.ate_rmse_m);
 }
 

@@ -160,5 +160,44 @@ TEST(DynamicScores, ObjectClustersScoreHighAndBackgroundLow) {
   }
 }
 
+TEST(ModelOcclusion, OnlySurfacesInFrontOfTheModelCount) {
+  const cv::Mat depth = (cv::Mat_<float>(1, 5) << 1.0f, 1.0f, 2.0f, 0.0f, 1.0f);
+  const cv::Mat model = (cv::Mat_<float>(1, 5) << 3.0f, 1.02f, 1.5f, 2.0f, 0.0f);
+  const cv::Mat r = modelOcclusion(depth, model, 0.03);
+  EXPECT_NEAR(r.at<float>(0, 0), 3.0 - 1.03, 1e-6);  // 2 m in front of the background, less the margin
+  EXPECT_EQ(r.at<float>(0, 1), 0.f);                 // within the noise margin
+  EXPECT_EQ(r.at<float>(0, 2), 0.f);                 // behind the model: a revealed background
+  EXPECT_TRUE(std::isnan(r.at<float>(0, 3)));        // no measurement
+  EXPECT_TRUE(std::isnan(r.at<float>(0, 4)));        // no model
+  EXPECT_THROW(modelOcclusion(depth, cv::Mat(1, 4, CV_32F, cv::Scalar(1)), 0.03), InputError);
+}
+
+TEST(DynamicScores, ModelTermKeepsOnlyGroupsThatMove) {
+  // Clusters 0-1 touch (one object, only cluster 0 shows motion); cluster 2 is alone (a thin
+  // static structure the map never fused). All three lie 2 m in front of the model.
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 6) << 0, 0, 1, 1, 2, 2);
+  g.num_clusters = 3;
+  g.sizes = {2, 2, 2};
+  g.mean_depth = {1.0f, 1.0f, 1.0f};
+  g.centroids.resize(3);
+  g.edges = {{0, 1}};
+  ResidualImages r;
+  r.r_F = (cv::Mat_<float>(1, 6) << 10.f, 10.f, 0.f, 0.f, 0.f, 0.f);
+  r.r_M = cv::Mat(1, 6, CV_32F, cv::Scalar(2.0f));
+  ScoreConfig cfg;
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  EXPECT_GT(s.b[0], 0.5f);
+  EXPECT_GT(s.b[1], 0.5f);
+  EXPECT_LT(s.b[2], 0.5f);
+  EXPECT_NEAR(s.delta[2], 0.0, 1e-6);  // its model term was dropped
+  cfg.model_needs_motion = false;
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[2], 0.5f);
+  cfg.alpha_M = 0;  // the paper's Eq. 10: only the moving cluster's own group member is found
+  const DynamicScores paper = computeDynamicScores(g, r, cfg);
+  EXPECT_GT(paper.b[0], paper.b[1]);
+  EXPECT_LT(paper.b[2], 0.5f);
+}
+
 }  // namespace
 }  // namespace ff

