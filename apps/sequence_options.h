@@ -27,7 +27,7 @@ struct SystemOptions {
     cmd->add_option("--set", overrides, "Override one setting, e.g. --set odometry.levels=3 (repeatable)");
     cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
     cmd->add_flag("--no-segmentation", no_segmentation, "Plain robust odometry, no dynamic segmentation");
-    cmd->add_option("--tracking", tracking, "frame_to_model (default) or frame_to_frame");
+    cmd->add_option("--tracking", tracking, "frame_to_keyframe (default), frame_to_frame or frame_to_model");
   }
 
   SequenceOptions sequenceOptions() const {

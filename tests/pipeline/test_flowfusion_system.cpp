@@ -149,5 +149,23 @@ TEST(RunSequence, WritesResultsAndRefusesANonEmptyFolder) {
   EXPECT_THROW(runSequence(sequence, SystemConfig{}, options), InputError);
 }
 
+TEST(SystemConfig, BadSettingsAreRejectedByName) {
+  auto rejects = [](auto&& edit, const std::string& name) {
+    SystemConfig c;
+    edit(c);
+    try {
+      validate(c);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  };
+  rejects([](SystemConfig& c) { c.pipeline.tracking = "icp"; }, "pipeline.tracking");
+  rejects([](SystemConfig& c) { c.scores.theta_t = c.scores.theta_b; }, "scores.theta_t");
+  rejects([](SystemConfig& c) { c.scores.alpha_M = -1; }, "scores.alpha_M");
+  rejects([](SystemConfig& c) { c.scores.model_margin = -0.1; }, "scores.model_margin");
+  EXPECT_NO_THROW(validate(SystemConfig{}));
+}
+
 }  // namespace
 }  // namespace ff

@@ -28,6 +28,8 @@ void validate(const SystemConfig& c) {
   makeOpticalFlow(c.flow);
   makeClusterer(c.clustering);
   if (!(c.scores.theta_t > c.scores.theta_b)) throw InputError("scores.theta_t must be greater than scores.theta_b");
+  if (!(c.scores.alpha_M >= 0)) throw InputError("scores.alpha_M must be >= 0 (0 turns the model term off)");
+  if (!(c.scores.model_margin >= 0)) throw InputError("scores.model_margin must be >= 0");
 }
 
 struct FlowFusionSystem::Previous {
