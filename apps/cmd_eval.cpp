@@ -1,4 +1,5 @@
-// `flowfusion eval ate|rpe|seg`: the TUM benchmark's trajectory metrics and mask metrics.
+// `flowfusion eval ate|rpe|seg|map`: the TUM benchmark's trajectory metrics, mask metrics and the
+// distance between two map point clouds.
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -6,6 +7,7 @@
 #include "command.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/fusion/map_compare.h"
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff::app {
@@ -16,6 +18,7 @@ struct EvalOptions {
   bool json = false;
   double max_diff_s = 0.02;
   double delta_s = 1.0;
+  double threshold_m = 0.03;
 };
 
 void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
@@ -63,8 +66,25 @@ void runSeg(const EvalOptions& o) {
               r.pooled.recall);
 }
 
+void printDifference(const char* prefix, const MapDifference& d) {
+  std::printf("%s.mean %f m\n%s.median %f m\n%s.fraction_beyond_threshold %f\n", prefix, d.mean_m, prefix, d.median_m,
+              prefix, d.fraction_beyond);
+}
+
+void runMap(const EvalOptions& o) {
+  const auto r = compareMaps(readMapPoints(o.gt), readMapPoints(o.est), o.threshold_m);
+  if (o.json) {
+    std::cout << nlohmann::json(r).dump(2) << '\n';
+    return;
+  }
+  std::printf("reference_points %zu points\ntest_points %zu points\nthreshold %f m\n", r.reference_to_test.points,
+              r.test_to_reference.points, r.threshold_m);
+  printDifference("test_to_reference", r.test_to_reference);
+  printDifference("reference_to_test", r.reference_to_test);
+}
+
 const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
-  auto* eval = app.add_subcommand("eval", "Evaluate trajectories (TUM ATE/RPE) and dynamic masks");
+  auto* eval = app.add_subcommand("eval", "Evaluate trajectories (TUM ATE/RPE), dynamic masks and maps");
   eval->require_subcommand(1);
   auto opts = std::make_shared<EvalOptions>();
 
@@ -91,6 +111,15 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
   seg->add_option("EST_MASKS", opts->est, "folder of estimated masks")->required();
   seg->add_flag("--json", opts->json, "print the result as JSON");
   seg->callback([opts] { runSeg(*opts); });
+
+  auto* map = eval->add_subcommand(
+      "map", "Nearest-neighbour distances between two map point clouds (map_points.ply), both directions");
+  map->add_option("REFERENCE", opts->gt, "reference point cloud (PLY)")->required();
+  map->add_option("TEST", opts->est, "point cloud compared with the reference (PLY)")->required();
+  map->add_option("--threshold", opts->threshold_m, "distance beyond which a point counts as different, m")
+      ->capture_default_str();
+  map->add_flag("--json", opts->json, "print the result as JSON");
+  map->callback([opts] { runMap(*opts); });
 }};
 
 }  // namespace

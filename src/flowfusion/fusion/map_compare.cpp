@@ -1,0 +1,86 @@
+#include "flowfusion/fusion/map_compare.h"
+
+#include <open3d/geometry/PointCloud.h>
+#include <open3d/io/PointCloudIO.h>
+#include <open3d/utility/Logging.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+namespace {
+
+open3d::geometry::PointCloud toCloud(const std::vector<Eigen::Vector3f>& points) {
+  open3d::geometry::PointCloud cloud;
+  cloud.points_.reserve(points.size());
+  for (const auto& p : points) cloud.points_.push_back(p.cast<double>());
+  return cloud;
+}
+
+}  // namespace
+
+MapDifference mapDifference(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
+                            double threshold_m) {
+  if (!(threshold_m > 0) || !std::isfinite(threshold_m))
+    throw InputError("map comparison threshold must be a positive number of metres, got " +
+                     std::to_string(threshold_m));
+  MapDifference d;
+  d.points = from.size();
+  if (from.empty()) return d;
+  if (to.empty())
+    throw InputError("cannot compare a map of " + std::to_string(from.size()) + " points with an empty map");
+
+  // An exact k-d tree (Open3D, nanoflann) is fast enough: `eval map` on two 300k-point clouds,
+  // both directions and both files read, takes 0.6 s on one core.
+  std::vector<double> distances = toCloud(from).ComputePointCloudDistance(toCloud(to));
+  double sum = 0;
+  size_t beyond = 0;
+  for (double v : distances) {
+    sum += v;
+    beyond += v > threshold_m;
+  }
+  const double n = static_cast<double>(distances.size());
+  d.mean_m = sum / n;
+  d.fraction_beyond = static_cast<double>(beyond) / n;
+  const auto mid = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() / 2);
+  std::nth_element(distances.begin(), mid, distances.end());
+  d.median_m = distances.size() % 2 == 1 ? *mid : 0.5 * (*std::max_element(distances.begin(), mid) + *mid);
+  return d;
+}
+
+MapComparison compareMaps(const std::vector<Eigen::Vector3f>& reference, const std::vector<Eigen::Vector3f>& test,
+                          double threshold_m) {
+  return {threshold_m, mapDifference(test, reference, threshold_m), mapDifference(reference, test, threshold_m)};
+}
+
+std::vector<Eigen::Vector3f> readMapPoints(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": point cloud file does not exist");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": not a point cloud file");
+
+  open3d::geometry::PointCloud cloud;
+  {
+    // Open3D warns on stdout about files it cannot parse; the InputError below says it instead.
+    open3d::utility::VerbosityContextManager quiet(open3d::utility::VerbosityLevel::Error);
+    quiet.Enter();
+    const bool ok = open3d::io::ReadPointCloud(path, cloud);
+    quiet.Exit();
+    if (!ok) throw InputError(path + ": unreadable point cloud (corrupt, or not a PLY/PCD/XYZ file)");
+  }
+  if (cloud.points_.empty()) throw InputError(path + ": point cloud holds no points");
+
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(cloud.points_.size());
+  for (const auto& p : cloud.points_) {
+    if (!p.allFinite()) throw InputError(path + ": point cloud holds non-finite coordinates");
+    points.push_back(p.cast<float>());
+  }
+  return points;
+}
+
+}  // namespace ff
