@@ -114,5 +114,26 @@ TEST(CmdEval, SegPrintsMeanAndPooledScores) {
   EXPECT_NEAR(valueAfter(r.output, "pooled_recall"), 0.5, 1e-6);
 }
 
+// ASCII PLY of a 10x10 grid of points 1 cm apart on z = 0, the first `lifted` of them 10 cm up.
+std::string writeGridPly(const std::filesystem::path& path, int lifted) {
+  std::ofstream f(path);
+  f << "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  for (int k = 0; k < 100; ++k) f << 0.01 * (k % 10) << " " << 0.01 * (k / 10) << " " << (k < lifted ? 0.1 : 0.0) << "\n";
+  return path.string();
+}
+
+TEST(CmdEval, MapReportsTheFractionOfPointsBeyondTheThreshold) {
+  ff::testing::TempDir dir;
+  const std::string ref = writeGridPly(dir.path() / "ref.ply", 0);
+  const std::string test = writeGridPly(dir.path() / "test.ply", 10);
+  const auto r = runFlowfusion("eval map " + ref + " " + test + " --threshold 0.03");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NEAR(valueAfter(r.output, "test_to_reference.fraction_beyond_threshold"), 0.10, 1e-6);
+  EXPECT_NEAR(valueAfter(r.output, "reference_to_test.fraction_beyond_threshold"), 0.0, 1e-6);
+  const auto missing = runFlowfusion("eval map " + ref + " " + (dir.path() / "none.ply").string());
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.output.find("none.ply"), std::string::npos) << missing.output;
+}
+
 }  // namespace
 }  // namespace ff::eval
