@@ -320,15 +320,15 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
   // produce them, and the cost grows with the square.
   constexpr int kMaxHalfSplat = 8;
   const float stable = static_cast<float>(config_.stable_confidence);
-  const int latest = stable_only ? std::numeric_limits<int>::max() : frame_index_ - 1;
+  const int latest = frame_index_ - 1;
 
   std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const Surfel& s = surfels_[k];
       // Unstable surfels only while they are being observed (noise and the unmasked parts of moving
-      // objects stay out of the tracking reference, as in ElasticFusion).
-      if (s.confidence < stable && s.last_seen < latest) continue;
+      // objects stay out of the tracking reference, as in ElasticFusion), and never for stable_only.
+      if (s.confidence < stable && (stable_only || s.last_seen < latest)) continue;
       const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
       if (pc.z() < min_depth) continue;
       const Eigen::Vector3f nc = R_cam_world * s.normal;

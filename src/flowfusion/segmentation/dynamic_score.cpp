@@ -90,6 +90,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
 
   // Per cluster and term: sum and count of valid pixels.
   constexpr int K = 4;
+  constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
   std::vector<double> sum(K * n, 0.0);
   std::vector<int> cnt(K * n, 0);
   const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M};
@@ -118,7 +119,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
     for (int k = 0; k < K; ++k) {
       if (cnt[K * c + k] == 0) continue;
       const double term = scale[k] * sum[K * c + k] / cnt[K * c + k];
-      (k == 3 ? model[c] : d) += term;
+      (k == kModelTerm ? model[c] : d) += term;
       any = true;
     }
     delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
