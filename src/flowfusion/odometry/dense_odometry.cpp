@@ -156,14 +156,25 @@ cv::Mat weightsAtLevel(const cv::Mat& weights, const cv::Size& size) {
   return out;
 }
 
+// Target weight at the pixel nearest to a warp, 1 without weights.
+inline float targetWeight(const cv::Mat& weight, const Warp& w) {
+  if (weight.empty()) return 1.0f;
+  return weight.at<float>(w.y0 + (w.ay > 0.5f ? 1 : 0), w.x0 + (w.ax > 0.5f ? 1 : 0));
+}
+
 constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
 
 }  // namespace
 
+void setTargetWeights(OdometryFrame& frame, const cv::Mat& weights) {
+  for (PyramidLevel& level : frame.pyramid)
+    level.target_weight = weights.empty() || level.depth.empty() ? cv::Mat() : weightsAtLevel(weights, level.depth.size());
+}
+
 DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { validate(config_); }
 
 OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_init,
-                                       const cv::Mat& weights) const {
+                                       const cv::Mat& weights, int coarsest_level) const {
   const OdometryConfig& c = config_;
   OdometryResult result;
   result.T_cur_ref = T_init;
@@ -176,7 +187,8 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
   const float sI = static_cast<float>(c.alpha_I / c.sigma_I);
   Matrix6d H_last = Matrix6d::Zero();
 
-  for (int level = c.levels - 1; level >= c.finest_level; --level) {
+  const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
+  for (int level = start_level; level >= c.finest_level; --level) {
     const PyramidLevel& A = ref.level(level);
     const PyramidLevel& B = cur.level(level);
     const CameraIntrinsics& cam = A.camera;
@@ -205,11 +217,13 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
             for (int x = 1; x < A.depth.cols - 1; ++x) {
               const float z = dA[x];
               if (!(z >= zmin && z <= zmax)) continue;
-              const float v_pix = wr ? wr[x] : 1.0f;
+              float v_pix = wr ? wr[x] : 1.0f;
               if (v_pix <= 0) continue;
               const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
               Warp w;
               if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
+              v_pix *= targetWeight(B.target_weight, w);
+              if (v_pix <= 0) continue;
               // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
               const float iz = 1.0f / w.qz, iz2 = iz * iz;
               const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
@@ -332,6 +346,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFra
         if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
                        (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
           continue;
+        if (targetWeight(B.target_weight, w) < 0.5f) continue;
         oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
         const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
         if (zB > 0) oD[x] = std::abs(zB - w.qz);

@@ -63,6 +63,9 @@ struct OdometryFrame {
 OdometryFrame prepareOdometryFrame(const cv::Mat& intensity, const cv::Mat& depth, const CameraIntrinsics& camera,
                                    const OdometryConfig& config);
 
+// Sets every level's target_weight from `weights` (CV_32FC1 in [0, 1], any size; empty clears them).
+void setTargetWeights(OdometryFrame& frame, const cv::Mat& weights);
+
 struct OdometryResult {
   bool ok = false;
   std::string message;           // what happened, e.g. why it failed
@@ -77,10 +80,11 @@ class DenseOdometry {
  public:
   explicit DenseOdometry(const OdometryConfig& config = {});
   // Estimates T_cur_ref. `weights` (optional, CV_32F in [0, 1], any size: resized to each level)
-  // scales each reference pixel's terms. Never returns NaN: failures have ok = false and
-  // T_cur_ref = the initial guess.
+  // scales each reference pixel's terms. `coarsest_level` (-1: levels - 1) is where the
+  // coarse-to-fine descent starts; a re-estimate from a close guess needs only the fine levels.
+  // Never returns NaN: failures have ok = false and T_cur_ref = the initial guess.
   OdometryResult estimate(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_cur_ref_init = SE3::Identity(),
-                          const cv::Mat& weights = {}) const;
+                          const cv::Mat& weights = {}, int coarsest_level = -1) const;
   const OdometryConfig& config() const { return config_; }
 
  private:
@@ -88,7 +92,9 @@ class DenseOdometry {
 };
 
 // Per-pixel absolute residuals |r_I| ([0,1] units) and |r_D| (m) of the reference frame's
-// pixels at pyramid `level` under motion T_cur_ref; NaN where a pixel has no valid warp.
+// pixels at pyramid `level` under motion T_cur_ref; NaN where a pixel has no valid warp or lands
+// where the other frame's target_weight is below 0.5 (a moving object there, not evidence of
+// this pixel's motion).
 struct PixelResiduals {
   cv::Mat abs_intensity;  // CV_32F
   cv::Mat abs_depth;      // CV_32F
