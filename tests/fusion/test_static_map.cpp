@@ -106,6 +106,69 @@ TEST(StaticMap, PredictionReproducesDepthAtFusedPoseAndCoarserLevel) {
   }
 }
 
+TEST(StaticMap, StableDepthMatchesTheRayTracedPredictionAndLeavesOutUnstableSurfels) {
+  RoomFixture room;
+  room.frames = 12;
+  const StaticMap map = fuse(room, false);
+  const CameraIntrinsics cam = room.camera.atLevel(1);
+  const SE3 pose = room.pose(room.frames - 1);
+  const cv::Mat fast = map.predictStableDepth(pose, cam);
+  const ModelPrediction full = map.predict(pose, cam);
+  ASSERT_EQ(fast.type(), CV_32FC1);
+  ASSERT_EQ(fast.size(), full.depth.size());
+  std::vector<double> rel_err;
+  int both = 0, only_full = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const float zf = fast.at<float>(y, x), zr = full.depth.at<float>(y, x);
+      if (zr > 0 && zf > 0) {
+        ++both;
+        rel_err.push_back(std::abs(zf - zr) / zr);
+      } else if (zr > 0) {
+        ++only_full;
+      }
+    }
+  const double coverage = static_cast<double>(both) / (both + only_full);
+  std::sort(rel_err.begin(), rel_err.end());
+  const double p95 = rel_err[rel_err.size() * 95 / 100], p99 = rel_err[rel_err.size() * 99 / 100];
+  std::printf("stable depth: coverage %.3f of the ray-traced one, |diff| / depth median %.4f, p95 %.4f, p99 %.4f\n",
+              coverage, median(rel_err), p95, p99);
+  EXPECT_GT(coverage, 0.97);
+  EXPECT_LT(p95, 0.01);  // the segmentation's margins are 1 % (agreement) and 3 % (occlusion)
+
+  // One frame fused into an empty map: nothing is stable yet, so nothing is drawn.
+  StaticMap fresh;
+  const auto v = room.render(0);
+  fresh.integrate(v.frame, room.camera, room.pose(0));
+  EXPECT_GT(fresh.size(), 0u);
+  EXPECT_EQ(cv::countNonZero(fresh.predictStableDepth(room.pose(0), cam)), 0);
+  EXPECT_GT(cv::countNonZero(fresh.predict(room.pose(0), cam).depth), 0);
+}
+
+TEST(StaticMap, SurfacesSeenAsDynamicLeaveTheMap) {
+  // A static room fused for a while, then seen twice with every pixel weighted as dynamic (what
+  // the segmentation says once an object fused by mistake starts to move).
+  RoomFixture room;
+  room.frames = 10;
+  StaticMap map = fuse(room, false);
+  const size_t before = map.points().positions.size();
+  const auto v = room.render(room.frames - 1);
+  const cv::Mat dynamic = cv::Mat::zeros(v.frame.depth.size(), CV_32F);
+  FusionConfig off;
+  off.dynamic_removal = false;
+  for (int k = 0; k < off.free_space_votes; ++k) map.integrate(v.frame, room.camera, room.pose(room.frames - 1), dynamic);
+  const size_t after = map.points().positions.size();
+  std::printf("surfels seen as dynamic: %zu stable before, %zu after\n", before, after);
+  EXPECT_LT(after, before / 2);  // the part of the room in view is gone
+
+  StaticMap unchanged(off);
+  for (int i = 0; i < room.frames; ++i) unchanged.integrate(room.render(i).frame, room.camera, room.pose(i));
+  const size_t unchanged_before = unchanged.points().positions.size();
+  for (int k = 0; k < off.free_space_votes; ++k)
+    unchanged.integrate(v.frame, room.camera, room.pose(room.frames - 1), dynamic);
+  EXPECT_EQ(unchanged.points().positions.size(), unchanged_before);
+}
+
 TEST(StaticMap, MaskedMovingObjectLeavesNoGhostAndBackgroundFillsIn) {
   RoomFixture room;
   room.with_sphere = true;

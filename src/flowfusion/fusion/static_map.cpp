@@ -45,7 +45,7 @@ struct Measurement {
   float radius = 0;
 };
 
-enum class Action : uint8_t { kNone, kMerge, kAdd };
+enum class Action : uint8_t { kNone, kMerge, kAdd, kDynamic };
 
 }  // namespace
 
@@ -110,6 +110,7 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
   // weight, also beyond max_depth_m: the ray still crossed free space) is the free-space evidence.
   std::vector<Measurement> meas(static_cast<size_t>(gw) * gh);
   std::vector<float> grid_depth(meas.size(), 0.0f);
+  std::vector<float> dynamic_depth(meas.size(), 0.0f);  // depth of pixels weighted as dynamic
   tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
       const int y = j * stride;
@@ -120,7 +121,10 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
         const float z = validDepth(x, y);
         if (z == 0) continue;
         const float w = static_weight.empty() ? 1.0f : static_weight.at<float>(y, x);
-        if (!(w >= min_weight)) continue;
+        if (!(w >= min_weight)) {
+          dynamic_depth[j * gw + i] = z;
+          continue;
+        }
         const Eigen::Vector3f p = pointAt(x, y, z);
         // Central differences where the neighbour is on the same surface, one-sided otherwise.
         auto neighbour = [&](int nx, int ny, Eigen::Vector3f& out) {
@@ -188,7 +192,7 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
           all_valid = d > 0;
           nearest = std::min(nearest, d);
         }
-      if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.free_space_votes;
+      if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.removal_votes;
     }
   });
 
@@ -201,9 +205,16 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
     for (int j = rows.begin(); j < rows.end(); ++j)
       for (int i = 0; i < gw; ++i) {
         const Measurement& m = meas[j * gw + i];
+        const uint64_t key = index_map[j * gw + i];
+        if (const float zd = dynamic_depth[j * gw + i]; zd > 0 && config_.dynamic_removal) {
+          // A surfel where the frame now sees a moving surface: it was fused while that surface
+          // stood still or before it was detected.
+          if (key != kEmpty && std::abs(keyDepth(key) - zd) < assoc * std::max(1.0f, zd))
+            action[j * gw + i] = Action::kDynamic;
+          continue;
+        }
         if (m.weight == 0) continue;
         const float tolerance = assoc * std::max(1.0f, m.point.z());
-        const uint64_t key = index_map[j * gw + i];
         if (key != kEmpty && std::abs(keyDepth(key) - m.point.z()) < tolerance) {
           const Eigen::Vector3f n_cam = R_cam_world * surfels_[keyIndex(key)].normal;
           if (n_cam.dot(m.normal) > cos_assoc) {
@@ -236,6 +247,7 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
   tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j)
       for (int i = 0; i < gw; ++i) {
+        if (action[j * gw + i] == Action::kDynamic) ++surfels_[keyIndex(index_map[j * gw + i])].removal_votes;
         if (action[j * gw + i] != Action::kMerge) continue;
         const Measurement& m = meas[j * gw + i];
         Surfel& s = surfels_[keyIndex(index_map[j * gw + i])];
@@ -248,16 +260,16 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
         s.intensity = (c * s.intensity + w * intensityAt(i, j)) / sum;
         s.confidence = sum;
         s.last_seen = frame_index;
-        s.free_space_votes = std::max(0, s.free_space_votes - 1);
+        s.removal_votes = std::max(0, s.removal_votes - 1);
       }
   });
 
-  // 4. Remove surfels seen through and those that never became stable.
+  // 4. Remove surfels seen through or seen moving, and those that never became stable.
   const float stable = static_cast<float>(config_.stable_confidence);
   const int window = config_.unstable_window_frames;
   const int votes = config_.free_space_votes;
   std::erase_if(surfels_, [&](const Surfel& s) {
-    return s.free_space_votes >= votes || (s.confidence < stable && frame_index - s.created > window);
+    return s.removal_votes >= votes || (s.confidence < stable && frame_index - s.created > window);
   });
 
   // 5. New surfels, within the memory budget.
@@ -307,7 +319,7 @@ void StaticMap::updateKeyframes(const SE3& T_world_cam, const CameraIntrinsics& 
   }
 }
 
-ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera, bool stable_only) const {
+ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
   const SE3 T_cam_world = T_world_cam.inverse();
@@ -327,8 +339,8 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const Surfel& s = surfels_[k];
       // Unstable surfels only while they are being observed (noise and the unmasked parts of moving
-      // objects stay out of the tracking reference, as in ElasticFusion), and never for stable_only.
-      if (s.confidence < stable && (stable_only || s.last_seen < latest)) continue;
+      // objects stay out of the tracking reference, as in ElasticFusion).
+      if (s.confidence < stable && s.last_seen < latest) continue;
       const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
       if (pc.z() < min_depth) continue;
       const Eigen::Vector3f nc = R_cam_world * s.normal;
@@ -386,6 +398,58 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
       }
   });
   return out;
+}
+
+cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
+  if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
+  const int w = camera.width, h = camera.height;
+  const SE3 T_cam_world = T_world_cam.inverse();
+  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
+  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float f = std::max(fx, fy);
+  const float min_depth = static_cast<float>(config_.min_depth_m);
+  const float stable = static_cast<float>(config_.stable_confidence);
+  constexpr float kMaxHalfSplat = 4;  // pixels; see predict()
+
+  std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const Surfel& s = surfels_[k];
+      if (s.confidence < stable) continue;
+      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+      if (pc.z() < min_depth) continue;
+      const float inv_z = 1.0f / pc.z();
+      const float u = fx * pc.x() * inv_z + cx, v = fy * pc.y() * inv_z + cy;
+      // At least the pixel the centre falls in, so that no stable surface is missed.
+      const float half = std::clamp(s.radius * f * inv_z, 0.5f, kMaxHalfSplat);
+      const int x0 = std::max(0, static_cast<int>(std::ceil(u - half)));
+      const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
+      const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
+      const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
+      // Depth of the surfel's plane along each pixel's ray; the centre's where the plane is seen
+      // edge-on.
+      const Eigen::Vector3f nc = R_cam_world * s.normal;
+      const float n_dot_p = nc.dot(pc);
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
+          float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : pc.z();
+          if (!(z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z())) z = pc.z();
+          atomicMin(zbuffer[static_cast<size_t>(y) * w + x], depthKey(z, static_cast<uint32_t>(k)));
+        }
+    }
+  });
+  cv::Mat depth(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y) {
+    float* row = depth.ptr<float>(y);
+    for (int x = 0; x < w; ++x) {
+      const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
+      row[x] = key == kEmpty ? 0.0f : keyDepth(key);
+    }
+  }
+  return depth;
 }
 
 MapPoints StaticMap::points() const {

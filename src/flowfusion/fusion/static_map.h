@@ -62,6 +62,10 @@ struct FusionConfig {
   // vote; each association takes one away; free_space_votes votes remove it.
   double free_space_margin_m = 0.05;
   int free_space_votes = 2;
+  // A surfel at the depth of a pixel weighted as dynamic (below min_static_weight) gets a vote too:
+  // an object fused while it stood still, or before it was detected, leaves the map once it is
+  // seen moving, instead of becoming background that the segmentation then agrees with.
+  bool dynamic_removal = true;
   // Memory budget: at most this many surfels (about 64 bytes each). When reached no new surfels
   // are added (existing ones still update), budgetReached() turns true and one warning is logged.
   int max_surfels = 3000000;
@@ -77,7 +81,7 @@ struct FusionConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, integration_stride, min_depth_m, max_depth_m,
                                                 min_static_weight, association_distance_m, association_angle_deg,
                                                 depth_discontinuity_ratio, radius_scale, stable_confidence,
-                                                unstable_window_frames, free_space_margin_m, free_space_votes,
+                                                unstable_window_frames, free_space_margin_m, free_space_votes, dynamic_removal,
                                                 max_surfels, keyframe_distance_m, keyframe_angle_deg, max_keyframes,
                                                 mesh_voxel_m, mesh_truncation_m)
 
@@ -108,7 +112,7 @@ struct Surfel {
   float intensity = 0;       // [0, 1]
   int32_t created = 0;       // frame index of creation
   int32_t last_seen = 0;     // frame index of the last update
-  int32_t free_space_votes = 0;
+  int32_t removal_votes = 0;  // free-space and dynamic votes minus associations
 };
 
 class StaticMap {
@@ -121,11 +125,18 @@ class StaticMap {
   void integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                  const cv::Mat& static_weight = {});
 
-  // Renders the model at T_world_cam with `camera` (any resolution). By default unstable surfels
-  // observed in the last frame are drawn too (tracking wants every surface it just saw);
-  // stable_only draws only surfels confirmed over several frames (what the segmentation compares
-  // against: a moving object fused once by mistake is not yet part of the background).
-  ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera, bool stable_only = false) const;
+  // Renders the model at T_world_cam with `camera` (any resolution): every pixel's ray meets the
+  // nearest surfel disc. Unstable surfels observed in the last frame are drawn too (tracking wants
+  // every surface it just saw).
+  ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
+
+  // Depth (CV_32FC1, metres, 0 = none) of the stable surfels only, each splatted as a square of its
+  // projected diameter with its plane's depth: what the segmentation compares a frame against (a
+  // moving object fused once by mistake is not yet part of the background). The square covers a
+  // little more than the disc (depth edges bleed by a pixel towards the far side, which only hides
+  // evidence), and without predict()'s per-surfel ellipse bound and ray-disc test it costs about
+  // half as much.
+  cv::Mat predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
 
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }
