@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "../flow/analytic_scene.h"
@@ -170,6 +171,41 @@ TEST(ModelOcclusion, OnlySurfacesInFrontOfTheModelCount) {
   EXPECT_TRUE(std::isnan(r.at<float>(0, 3)));        // no measurement
   EXPECT_TRUE(std::isnan(r.at<float>(0, 4)));        // no model
   EXPECT_THROW(modelOcclusion(depth, cv::Mat(1, 4, CV_32F, cv::Scalar(1)), 0.03), InputError);
+}
+
+TEST(ModelAgreement, OnlySurfacesAtTheModelsDepthAgree) {
+  const cv::Mat depth = (cv::Mat_<float>(1, 5) << 1.0f, 1.0f, 2.0f, 0.0f, 1.0f);
+  const cv::Mat model = (cv::Mat_<float>(1, 5) << 1.005f, 1.05f, 1.9f, 2.0f, 0.0f);
+  const cv::Mat a = modelAgreement(depth, model, 0.01);
+  EXPECT_EQ(a.at<float>(0, 0), 1.f);           // within 1 % of the depth
+  EXPECT_EQ(a.at<float>(0, 1), 0.f);           // 5 cm behind: not the same surface
+  EXPECT_EQ(a.at<float>(0, 2), 0.f);           // 10 cm in front
+  EXPECT_TRUE(std::isnan(a.at<float>(0, 3)));  // no measurement
+  EXPECT_TRUE(std::isnan(a.at<float>(0, 4)));  // no model
+  EXPECT_THROW(modelAgreement(depth, cv::Mat(1, 4, CV_32F, cv::Scalar(1)), 0.01), InputError);
+}
+
+TEST(DynamicScores, AgreementWithTheMapScalesTheMotionTerms) {
+  // Two lone clusters with the same large flow residual (a static pole's silhouette, say); the
+  // first lies where the static map has a surface over three quarters of its pixels.
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 8) << 0, 0, 0, 0, 1, 1, 1, 1);
+  g.num_clusters = 2;
+  g.sizes = {4, 4};
+  g.mean_depth = {1.0f, 1.0f};
+  g.centroids.resize(2);
+  ResidualImages r;
+  r.r_F = cv::Mat(1, 8, CV_32F, cv::Scalar(20.f));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  r.a_M = (cv::Mat_<float>(1, 8) << 1.f, 1.f, 1.f, 0.f, nan, nan, nan, nan);
+  ScoreConfig cfg;
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  EXPECT_NEAR(s.delta[1], cfg.alpha_F * 20, 1e-5);         // no map there: Eq. 10 alone
+  EXPECT_NEAR(s.delta[0], cfg.alpha_F * 20 * 0.25, 1e-5);  // scaled by 1 - 0.75
+  EXPECT_LT(s.b[0], 0.5f);
+  EXPECT_GT(s.b[1], 0.5f);
+  cfg.model_agreement = 0;
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }
 
 TEST(DynamicScores, ModelTermKeepsOnlyGroupsThatMove) {

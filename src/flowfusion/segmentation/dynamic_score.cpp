@@ -83,17 +83,19 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.r_D, labels, "r_D");
   checkResidual(residuals.r_F, labels, "r_F");
   checkResidual(residuals.r_M, labels, "r_M");
+  checkResidual(residuals.a_M, labels, "a_M");
   const int n = graph.num_clusters;
   if (static_cast<int>(graph.mean_depth.size()) != n)
     throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
                      std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
-  constexpr int K = 4;
+  constexpr int K = 5;
   constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
+  constexpr int kAgreement = 4;  // index of a_M: scales the motion terms
   std::vector<double> sum(K * n, 0.0);
   std::vector<int> cnt(K * n, 0);
-  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M};
+  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M, &residuals.a_M};
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
     for (int k = 0; k < K; ++k) {
@@ -113,15 +115,17 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   for (int c = 0; c < n; ++c) {
     const double D = graph.mean_depth[c];
     const double inv_D = D > 0 ? 1.0 / D : 0.0;
-    const double scale[K] = {config.alpha_I, inv_D, config.alpha_F, config.alpha_M * inv_D};
+    const double scale[kModelTerm + 1] = {config.alpha_I, inv_D, config.alpha_F, config.alpha_M * inv_D};
     double d = 0;
     bool any = false;
-    for (int k = 0; k < K; ++k) {
+    for (int k = 0; k <= kModelTerm; ++k) {
       if (cnt[K * c + k] == 0) continue;
       const double term = scale[k] * sum[K * c + k] / cnt[K * c + k];
       (k == kModelTerm ? model[c] : d) += term;
       any = true;
     }
+    if (cnt[K * c + kAgreement] > 0)
+      d *= std::max(0.0, 1.0 - config.model_agreement * sum[K * c + kAgreement] / cnt[K * c + kAgreement]);
     delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
   }
   std::vector<double> full(n);
@@ -166,6 +170,22 @@ cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double 
     float* o = out.ptr<float>(v);
     for (int u = 0; u < depth.cols; ++u)
       o[u] = (z[u] > 0 && zm[u] > 0) ? std::max(0.f, zm[u] - z[u] * (1 + m)) : nan;
+  }
+  return out;
+}
+
+cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin) {
+  if (depth.type() != CV_32FC1 || model_depth.type() != CV_32FC1 || depth.size() != model_depth.size())
+    throw InputError("modelAgreement: depth and model depth must be CV_32FC1 of one size");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float m = static_cast<float>(margin);
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* z = depth.ptr<float>(v);
+    const float* zm = model_depth.ptr<float>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < depth.cols; ++u)
+      o[u] = (z[u] > 0 && zm[u] > 0) ? (std::abs(zm[u] - z[u]) <= m * z[u] ? 1.f : 0.f) : nan;
   }
   return out;
 }

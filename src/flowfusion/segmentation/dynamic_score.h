@@ -48,9 +48,20 @@ struct ScoreConfig {
   // residuals) is never fused, stays in front of the map and is flagged for ever: on the static
   // synthetic twin (seed 1) ATE went from 8 to 16 mm with every frame's pole marked dynamic.
   bool model_needs_motion = true;
+  // Static evidence from the map (our extension): a cluster whose surface coincides with the
+  // stable static map (within model_margin) over a fraction a of its pixels has its motion delta
+  // scaled by (1 - model_agreement * a). The motion terms fire on static surfaces with depth edges
+  // and thin parts (a lamp pole's r_D and flow residual at its silhouette); a surface that has been
+  // where the map says for several frames is background. A moving object leaves its mapped place,
+  // so its surface disagrees with the map; where the map has nothing the paper's Eq. 10 decides alone.
+  double model_agreement = 1.0;
+  // Depth differences below agreement_margin * depth count as agreement for the static evidence:
+  // tighter than model_margin, as an object passing close in front of a wall must not agree.
+  double agreement_margin = 0.01;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G, alpha_M,
-                                                model_margin, model_needs_motion)
+                                                model_margin, model_needs_motion, model_agreement,
+                                                agreement_margin)
 
 // Per-pixel residuals of A, CV_32F, same size as the cluster labels; NaN = invalid (skipped).
 // An empty image leaves its term out of Eq. 10.
@@ -59,6 +70,7 @@ struct ResidualImages {
   cv::Mat r_D;  // |depth residual|, metres
   cv::Mat r_F;  // flow residual, pixels
   cv::Mat r_M;  // occlusion of the static model, metres (modelOcclusion)
+  cv::Mat a_M;  // agreement with the static model, 1 or 0 (modelAgreement)
 };
 
 struct DynamicScores {
@@ -71,8 +83,8 @@ struct DynamicScores {
 double scoreTarget(double delta, double theta_b, double theta_t);
 double scoreWeight(double delta, double theta_b, double theta_t);
 
-// delta_i = alpha_I mean(r_I) + mean(r_D) / D_i + alpha_F mean(r_F) (+ alpha_M mean(r_M) / D_i)
-// over cluster i's pixels
+// delta_i = [alpha_I mean(r_I) + mean(r_D) / D_i + alpha_F mean(r_F)] (1 - model_agreement mean(a_M))
+//           (+ alpha_M mean(r_M) / D_i) over cluster i's pixels
 // (Eq. 10 normalised by size; each mean over the pixels where that residual is valid, so one
 // missing term does not drop the others), then b from solveScoreEnergy. Throws InputError on
 // mismatched sizes/types or invalid thresholds.
@@ -89,6 +101,10 @@ Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::ve
 // r_M per pixel: max(0, model_depth - depth - margin * depth), metres, CV_32F; NaN where either
 // depth is missing. Both CV_32FC1 of one size (throws InputError otherwise).
 cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double margin);
+
+// 1 where |model_depth - depth| <= margin * depth, 0 where not, NaN where either depth is
+// missing (CV_32F). Both CV_32FC1 of one size (throws InputError otherwise).
+cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin);
 
 // b per pixel of A (CV_32F), 0 where no cluster.
 cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores);
