@@ -18,6 +18,8 @@ void validate(const SystemConfig& c) {
   if (p.tracking == "frame_to_model" && !p.fusion)
     throw InputError("pipeline.tracking frame_to_model needs pipeline.fusion = true (the map is the model)");
   if (p.max_iterations < 1) throw InputError("pipeline.max_iterations must be at least 1");
+  if (p.refine_coarsest_level < -1 || p.refine_coarsest_level >= c.odometry.levels)
+    throw InputError("pipeline.refine_coarsest_level must be -1 (the coarsest) or in [0, odometry.levels)");
   if (p.segmentation_level < 0 || p.segmentation_level >= c.odometry.levels)
     throw InputError("pipeline.segmentation_level must be in [0, odometry.levels)");
   if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
@@ -30,6 +32,9 @@ void validate(const SystemConfig& c) {
   if (!(c.scores.theta_t > c.scores.theta_b)) throw InputError("scores.theta_t must be greater than scores.theta_b");
   if (!(c.scores.alpha_M >= 0)) throw InputError("scores.alpha_M must be >= 0 (0 turns the model term off)");
   if (!(c.scores.model_margin >= 0)) throw InputError("scores.model_margin must be >= 0");
+  if (!(c.scores.model_agreement >= 0 && c.scores.model_agreement <= 1))
+    throw InputError("scores.model_agreement must be in [0, 1] (0 turns the map's static evidence off)");
+  if (!(c.scores.agreement_margin > 0)) throw InputError("scores.agreement_margin must be > 0");
 }
 
 struct FlowFusionSystem::Previous {
@@ -181,11 +186,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       const ClusterGraph graph = clusterer_->cluster(seg_frame, seg_camera);
       timings_.add("clustering", since(t0));
       // The static map seen from the current estimate: what lies in front of it is not background.
-      cv::Mat r_M;
-      if (map_ && map_->size() > 0 && config_.scores.alpha_M > 0) {
+      cv::Mat r_M, a_M;
+      if (map_ && map_->size() > 0 && (config_.scores.alpha_M > 0 || config_.scores.model_agreement > 0)) {
         t0 = std::chrono::steady_clock::now();
-        const ModelPrediction seen = map_->predict(T_world_target * T_target_cur, seg_camera, true);
-        r_M = modelOcclusion(seg_frame.depth, seen.depth, config_.scores.model_margin);
+        const cv::Mat background = map_->predictStableDepth(T_world_target * T_target_cur, seg_camera);
+        if (config_.scores.alpha_M > 0) r_M = modelOcclusion(seg_frame.depth, background, config_.scores.model_margin);
+        if (config_.scores.model_agreement > 0)
+          a_M = modelAgreement(seg_frame.depth, background, config_.scores.agreement_margin);
         timings_.add("prediction", since(t0));
       }
       // Flow residuals are in pixels of the input image (ScoreConfig's units).
@@ -200,11 +207,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
         res.r_F = flowResidual(flow, egoFlow(seg_frame.depth, seg_camera, T_prev_cur)) * px_scale;
         res.r_M = r_M;
+        res.a_M = a_M;
         const DynamicScores ds = computeDynamicScores(graph, res, config_.scores);
         scores = pixelScores(graph, ds);
         timings_.add("scores", since(t0));
         t0 = std::chrono::steady_clock::now();
-        const OdometryResult again = odometry_.estimate(cur, *target, T_target_cur, staticWeights(scores));
+        const OdometryResult again = odometry_.estimate(cur, *target, T_target_cur, staticWeights(scores),
+                                                         opt.refine_coarsest_level);
         timings_.add("odometry", since(t0));
         result.iterations = round + 1;
         if (!again.ok) break;
@@ -234,6 +243,9 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     map_->integrate(frame, camera_, result.T_world_cam, full_scores.empty() ? cv::Mat() : staticWeights(full_scores));
     timings_.add("fusion", since(t0));
   }
+
+  // As a target (next frame's previous frame or keyframe), this frame's moving pixels count less.
+  if (!scores.empty()) setTargetWeights(cur, staticWeights(scores));
 
   if (opt.tracking == "frame_to_keyframe") {
     const SE3 T_kf_cur = keyframe_ ? keyframe_->T_world_cam.inverse() * result.T_world_cam : SE3::Identity();

@@ -40,6 +40,10 @@ struct PipelineOptions {
   int max_iterations = 8;            // segmentation <-> odometry rounds at most (paper, Table III)
   double converged_translation = 0.0005;  // m: the loop stops when a round moves the pose less
   double converged_rotation_deg = 0.05;   // deg: ... and rotates it less than this
+  // Pyramid level the weighted re-estimates of the loop start from (-1: the coarsest). They start
+  // at the last round's pose, a fraction of a pixel from the answer at the finer levels, so the
+  // coarse levels only cost time.
+  int refine_coarsest_level = 1;
   int segmentation_level = 1;        // pyramid level of clusters and residuals (1 = half size)
   float mask_threshold = 0.5f;       // pixels with b above it are written as dynamic
   // Weights of the first odometry of a frame come from the previous frame's scores, so a moving
@@ -56,7 +60,8 @@ struct PipelineOptions {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
                                                 keyframe_rotation_deg, segmentation, max_iterations,
-                                                converged_translation, converged_rotation_deg, segmentation_level,
+                                                converged_translation, converged_rotation_deg, refine_coarsest_level,
+                                                segmentation_level,
                                                 mask_threshold, carry_scores, fusion, constant_velocity,
                                                 shift_to_colour_time,
                                                 model_min_valid_fraction)

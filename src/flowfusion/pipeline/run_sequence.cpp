@@ -77,8 +77,10 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
       if (!cv::imwrite(p, overlayMask(frame.color, r.dynamic_mask))) throw InputError(p + ": cannot write overlay");
     }
     ++summary.frames;
+    summary.mean_rounds += r.iterations;
     if (options.progress) options.progress(i - first + 1, last - first + 1);
   }
+  if (summary.frames > 0) summary.mean_rounds /= static_cast<double>(summary.frames);
   summary.trajectory = system.trajectory();
   summary.tracking_failures = system.trackingFailures();
   summary.load_ms_median = eval::median(load_ms);
@@ -109,6 +111,7 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
     j["sequence"] = sequence.dir();
     j["frames"] = summary.frames;
     j["tracking_failures"] = summary.tracking_failures;
+    j["mean_rounds"] = summary.mean_rounds;
     j["map_surfels"] = summary.map_surfels;
     j["map_budget_reached"] = summary.map_budget_reached;
     j["peak_memory_mib"] = summary.peak_memory_mib;
