@@ -2,10 +2,10 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -26,11 +26,23 @@ uint64_t depthKey(float depth_m, uint32_t index) {
 float keyDepth(uint64_t key) { return std::bit_cast<float>(static_cast<uint32_t>(key >> 32)); }
 uint32_t keyIndex(uint64_t key) { return static_cast<uint32_t>(key & 0xffffffffu); }
 
-void atomicMin(uint64_t& slot, uint64_t key) {
-  std::atomic_ref<uint64_t> ref(slot);
-  uint64_t current = ref.load(std::memory_order_relaxed);
-  while (key < current && !ref.compare_exchange_weak(current, key, std::memory_order_relaxed)) {
-  }
+// Nearest-surfel buffer of `pixels` keys, filled by splat(k, write) for every surfel k in
+// parallel, write(pixel, key) keeping the minimum. Each thread fills its own buffer with plain
+// stores and the buffers are merged at the end: a locked compare-exchange per write took a quarter
+// of the rendering time.
+template <class Splat>
+std::vector<uint64_t> nearestSurfels(size_t surfels, size_t pixels, Splat&& splat) {
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> local(
+      [pixels] { return std::vector<uint64_t>(pixels, kEmpty); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint64_t>& buffer = local.local();
+    const auto write = [&buffer](size_t pixel, uint64_t key) { buffer[pixel] = std::min(buffer[pixel], key); };
+    for (size_t k = r.begin(); k < r.end(); ++k) splat(k, write);
+  });
+  std::vector<uint64_t> out(pixels, kEmpty);
+  for (const std::vector<uint64_t>& buffer : local)
+    for (size_t p = 0; p < pixels; ++p) out[p] = std::min(out[p], buffer[p]);
+  return out;
 }
 
 void requireRange(bool ok, const std::string& setting, const std::string& rule) {
@@ -174,26 +186,23 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float inv_stride = 1.0f / stride;
   const float margin = static_cast<float>(config_.free_space_margin_m);
-  std::vector<uint64_t> index_map(meas.size(), kEmpty);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      Surfel& s = surfels_[k];
-      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-      if (pc.z() < min_depth) continue;
-      const int i = static_cast<int>(std::lround((fx * pc.x() / pc.z() + cx) * inv_stride));
-      const int j = static_cast<int>(std::lround((fy * pc.y() / pc.z() + cy) * inv_stride));
-      if (i < 0 || j < 0 || i >= gw || j >= gh) continue;
-      atomicMin(index_map[j * gw + i], depthKey(pc.z(), static_cast<uint32_t>(k)));
-      float nearest = std::numeric_limits<float>::max();
-      bool all_valid = i > 0 && j > 0 && i < gw - 1 && j < gh - 1;
-      for (int dj = -1; dj <= 1 && all_valid; ++dj)
-        for (int di = -1; di <= 1 && all_valid; ++di) {
-          const float d = grid_depth[(j + dj) * gw + i + di];
-          all_valid = d > 0;
-          nearest = std::min(nearest, d);
-        }
-      if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.removal_votes;
-    }
+  const std::vector<uint64_t> index_map = nearestSurfels(surfels_.size(), meas.size(), [&](size_t k, auto&& write) {
+    Surfel& s = surfels_[k];
+    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+    if (pc.z() < min_depth) return;
+    const int i = static_cast<int>(std::lround((fx * pc.x() / pc.z() + cx) * inv_stride));
+    const int j = static_cast<int>(std::lround((fy * pc.y() / pc.z() + cy) * inv_stride));
+    if (i < 0 || j < 0 || i >= gw || j >= gh) return;
+    write(static_cast<size_t>(j) * gw + i, depthKey(pc.z(), static_cast<uint32_t>(k)));
+    float nearest = std::numeric_limits<float>::max();
+    bool all_valid = i > 0 && j > 0 && i < gw - 1 && j < gh - 1;
+    for (int dj = -1; dj <= 1 && all_valid; ++dj)
+      for (int di = -1; di <= 1 && all_valid; ++di) {
+        const float d = grid_depth[(j + dj) * gw + i + di];
+        all_valid = d > 0;
+        nearest = std::min(nearest, d);
+      }
+    if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.removal_votes;
   });
 
   // 3. Decide per fused pixel (read-only), then apply. A pixel updates only the surfel nearest
@@ -333,48 +342,46 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
   constexpr int kMaxHalfSplat = 8;
   const float stable = static_cast<float>(config_.stable_confidence);
   const int latest = frame_index_ - 1;
+  const size_t pixels = static_cast<size_t>(w) * h;
 
-  std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      const Surfel& s = surfels_[k];
-      // Unstable surfels only while they are being observed (noise and the unmasked parts of moving
-      // objects stay out of the tracking reference, as in ElasticFusion).
-      if (s.confidence < stable && s.last_seen < latest) continue;
-      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-      if (pc.z() < min_depth) continue;
-      const Eigen::Vector3f nc = R_cam_world * s.normal;
-      const float n_dot_p = nc.dot(pc);
-      if (n_dot_p >= 0) continue;  // seen from behind
-      const float u = fx * pc.x() / pc.z() + cx, v = fy * pc.y() / pc.z() + cy;
-      // Bounding box of the disc's image: an ellipse with semi-axes radius_px and radius_px * cos(view
-      // angle), the short one along the image direction in which the normal tilts away. Oblique
-      // discs (floors, walls seen at grazing angles) are the large ones, so this halves the work.
-      // The 15 % margin covers perspective; the exact ray-disc test below decides.
-      const float radius_px = std::min(static_cast<float>(kMaxHalfSplat), s.radius * std::max(fx, fy) / pc.z());
-      const float cos_view = -n_dot_p / pc.norm();
-      Eigen::Vector2f tilt(nc.x() * pc.z() - nc.z() * pc.x(), nc.y() * pc.z() - nc.z() * pc.y());
-      const float tilt_norm = tilt.norm();
-      tilt = tilt_norm > 1e-9f ? Eigen::Vector2f(tilt / tilt_norm) : Eigen::Vector2f(1, 0);
-      const float c2 = cos_view * cos_view;
-      const float half_u = 1.15f * radius_px * std::sqrt(tilt.y() * tilt.y() + c2 * tilt.x() * tilt.x());
-      const float half_v = 1.15f * radius_px * std::sqrt(tilt.x() * tilt.x() + c2 * tilt.y() * tilt.y());
-      const int x0 = std::max(0, static_cast<int>(std::ceil(u - half_u)));
-      const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half_u)));
-      const int y0 = std::max(0, static_cast<int>(std::ceil(v - half_v)));
-      const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half_v)));
-      const float r2 = s.radius * s.radius;
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          // Where the pixel's ray meets the surfel's plane, if inside its disc.
-          const Eigen::Vector3f ray((x - cx) / fx, (y - cy) / fy, 1.0f);
-          const float denom = nc.dot(ray);
-          if (denom > -1e-4f) continue;
-          const float z = n_dot_p / denom;
-          if (z < min_depth || (z * ray - pc).squaredNorm() > r2) continue;
-          atomicMin(zbuffer[static_cast<size_t>(y) * w + x], depthKey(z, static_cast<uint32_t>(k)));
-        }
-    }
+  const std::vector<uint64_t> zbuffer = nearestSurfels(surfels_.size(), pixels, [&](size_t k, auto&& write) {
+    const Surfel& s = surfels_[k];
+    // Unstable surfels only while they are being observed (noise and the unmasked parts of moving
+    // objects stay out of the tracking reference, as in ElasticFusion).
+    if (s.confidence < stable && s.last_seen < latest) return;
+    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+    if (pc.z() < min_depth) return;
+    const Eigen::Vector3f nc = R_cam_world * s.normal;
+    const float n_dot_p = nc.dot(pc);
+    if (n_dot_p >= 0) return;  // seen from behind
+    const float u = fx * pc.x() / pc.z() + cx, v = fy * pc.y() / pc.z() + cy;
+    // Bounding box of the disc's image: an ellipse with semi-axes radius_px and radius_px * cos(view
+    // angle), the short one along the image direction in which the normal tilts away. Oblique
+    // discs (floors, walls seen at grazing angles) are the large ones, so this halves the work.
+    // The 15 % margin covers perspective; the exact ray-disc test below decides.
+    const float radius_px = std::min(static_cast<float>(kMaxHalfSplat), s.radius * std::max(fx, fy) / pc.z());
+    const float cos_view = -n_dot_p / pc.norm();
+    Eigen::Vector2f tilt(nc.x() * pc.z() - nc.z() * pc.x(), nc.y() * pc.z() - nc.z() * pc.y());
+    const float tilt_norm = tilt.norm();
+    tilt = tilt_norm > 1e-9f ? Eigen::Vector2f(tilt / tilt_norm) : Eigen::Vector2f(1, 0);
+    const float c2 = cos_view * cos_view;
+    const float half_u = 1.15f * radius_px * std::sqrt(tilt.y() * tilt.y() + c2 * tilt.x() * tilt.x());
+    const float half_v = 1.15f * radius_px * std::sqrt(tilt.x() * tilt.x() + c2 * tilt.y() * tilt.y());
+    const int x0 = std::max(0, static_cast<int>(std::ceil(u - half_u)));
+    const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half_u)));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(v - half_v)));
+    const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half_v)));
+    const float r2 = s.radius * s.radius;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        // Where the pixel's ray meets the surfel's plane, if inside its disc.
+        const Eigen::Vector3f ray((x - cx) / fx, (y - cy) / fy, 1.0f);
+        const float denom = nc.dot(ray);
+        if (denom > -1e-4f) continue;
+        const float z = n_dot_p / denom;
+        if (z < min_depth || (z * ray - pc).squaredNorm() > r2) continue;
+        write(static_cast<size_t>(y) * w + x, depthKey(z, static_cast<uint32_t>(k)));
+      }
   });
 
   ModelPrediction out;
@@ -412,34 +419,32 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
   const float min_depth = static_cast<float>(config_.min_depth_m);
   const float stable = static_cast<float>(config_.stable_confidence);
   constexpr float kMaxHalfSplat = 4;  // pixels; see predict()
+  const size_t pixels = static_cast<size_t>(w) * h;
 
-  std::vector<uint64_t> zbuffer(static_cast<size_t>(w) * h, kEmpty);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels_.size()), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      const Surfel& s = surfels_[k];
-      if (s.confidence < stable) continue;
-      const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-      if (pc.z() < min_depth) continue;
-      const float inv_z = 1.0f / pc.z();
-      const float u = fx * pc.x() * inv_z + cx, v = fy * pc.y() * inv_z + cy;
-      // At least the pixel the centre falls in, so that no stable surface is missed.
-      const float half = std::clamp(s.radius * f * inv_z, 0.5f, kMaxHalfSplat);
-      const int x0 = std::max(0, static_cast<int>(std::ceil(u - half)));
-      const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
-      const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
-      const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
-      // Depth of the surfel's plane along each pixel's ray; the centre's where the plane is seen
-      // edge-on.
-      const Eigen::Vector3f nc = R_cam_world * s.normal;
-      const float n_dot_p = nc.dot(pc);
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
-          float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : pc.z();
-          if (!(z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z())) z = pc.z();
-          atomicMin(zbuffer[static_cast<size_t>(y) * w + x], depthKey(z, static_cast<uint32_t>(k)));
-        }
-    }
+  const std::vector<uint64_t> zbuffer = nearestSurfels(surfels_.size(), pixels, [&](size_t k, auto&& write) {
+    const Surfel& s = surfels_[k];
+    if (s.confidence < stable) return;
+    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+    if (pc.z() < min_depth) return;
+    const float inv_z = 1.0f / pc.z();
+    const float u = fx * pc.x() * inv_z + cx, v = fy * pc.y() * inv_z + cy;
+    // At least the pixel the centre falls in, so that no stable surface is missed.
+    const float half = std::clamp(s.radius * f * inv_z, 0.5f, kMaxHalfSplat);
+    const int x0 = std::max(0, static_cast<int>(std::ceil(u - half)));
+    const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
+    const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
+    // Depth of the surfel's plane along each pixel's ray; the centre's where the plane is seen
+    // edge-on.
+    const Eigen::Vector3f nc = R_cam_world * s.normal;
+    const float n_dot_p = nc.dot(pc);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
+        float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : pc.z();
+        if (!(z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z())) z = pc.z();
+        write(static_cast<size_t>(y) * w + x, depthKey(z, static_cast<uint32_t>(k)));
+      }
   });
   cv::Mat depth(h, w, CV_32FC1);
   for (int y = 0; y < h; ++y) {
