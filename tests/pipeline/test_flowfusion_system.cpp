@@ -167,6 +167,7 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
   rejects([](SystemConfig& c) { c.scores.model_agreement = 1.5; }, "scores.model_agreement");
   rejects([](SystemConfig& c) { c.scores.agreement_margin = 0; }, "scores.agreement_margin");
   rejects([](SystemConfig& c) { c.pipeline.refine_coarsest_level = 9; }, "pipeline.refine_coarsest_level");
+  rejects([](SystemConfig& c) { c.pipeline.refine_iterations = 0; }, "pipeline.refine_iterations");
   EXPECT_NO_THROW(validate(SystemConfig{}));
 }
 

@@ -20,6 +20,7 @@ void validate(const SystemConfig& c) {
   if (p.max_iterations < 1) throw InputError("pipeline.max_iterations must be at least 1");
   if (p.refine_coarsest_level < -1 || p.refine_coarsest_level >= c.odometry.levels)
     throw InputError("pipeline.refine_coarsest_level must be -1 (the coarsest) or in [0, odometry.levels)");
+  if (p.refine_iterations < 1) throw InputError("pipeline.refine_iterations must be at least 1");
   if (p.segmentation_level < 0 || p.segmentation_level >= c.odometry.levels)
     throw InputError("pipeline.segmentation_level must be in [0, odometry.levels)");
   if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
@@ -91,10 +92,20 @@ bool converged(const SE3& a, const SE3& b, const PipelineOptions& p) {
   return translationNorm(d) < p.converged_translation && rotationAngleDeg(d) < p.converged_rotation_deg;
 }
 
+OdometryConfig refineConfig(const SystemConfig& c) {
+  OdometryConfig o = c.odometry;
+  o.max_iterations = o.max_iterations_finest = c.pipeline.refine_iterations;
+  return o;
+}
+
 }  // namespace
 
 FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera, const SE3& T_world_first)
-    : config_(config), camera_(camera), odometry_((validate(config), config.odometry)), T_world_first_(T_world_first) {
+    : config_(config),
+      camera_(camera),
+      odometry_((validate(config), config.odometry)),
+      refine_odometry_(refineConfig(config)),
+      T_world_first_(T_world_first) {
   if (config_.pipeline.segmentation) {
     flow_ = makeOpticalFlow(config_.flow);
     clusterer_ = makeClusterer(config_.clustering);
@@ -212,7 +223,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         scores = pixelScores(graph, ds);
         timings_.add("scores", since(t0));
         t0 = std::chrono::steady_clock::now();
-        const OdometryResult again = odometry_.estimate(cur, *target, T_target_cur, staticWeights(scores),
+        const OdometryResult again = refine_odometry_.estimate(cur, *target, T_target_cur, staticWeights(scores),
                                                          opt.refine_coarsest_level);
         timings_.add("odometry", since(t0));
         result.iterations = round + 1;

@@ -44,6 +44,7 @@ struct PipelineOptions {
   // at the last round's pose, a fraction of a pixel from the answer at the finer levels, so the
   // coarse levels only cost time.
   int refine_coarsest_level = 1;
+  int refine_iterations = 1;         // Gauss-Newton iterations per level of each re-estimate
   int segmentation_level = 1;        // pyramid level of clusters and residuals (1 = half size)
   float mask_threshold = 0.5f;       // pixels with b above it are written as dynamic
   // Weights of the first odometry of a frame come from the previous frame's scores, so a moving
@@ -61,7 +62,7 @@ struct PipelineOptions {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
                                                 keyframe_rotation_deg, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
-                                                segmentation_level,
+                                                refine_iterations, segmentation_level,
                                                 mask_threshold, carry_scores, fusion, constant_velocity,
                                                 shift_to_colour_time,
                                                 model_min_valid_fraction)
@@ -110,6 +111,7 @@ class FlowFusionSystem {
   SystemConfig config_;
   CameraIntrinsics camera_;
   DenseOdometry odometry_;
+  DenseOdometry refine_odometry_;  // the loop's re-estimates (refine_iterations per level)
   std::unique_ptr<OpticalFlow> flow_;
   std::unique_ptr<Clusterer> clusterer_;
   std::unique_ptr<StaticMap> map_;
