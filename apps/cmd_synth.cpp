@@ -5,7 +5,7 @@
 #include <memory>
 
 #include "command.h"
-#include "flowfusion/core/config.h"
+#include "config_sources.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/pipeline/run_sequence.h"
 #include "flowfusion/synth/synthetic_scene.h"
@@ -18,8 +18,8 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
   struct Options {
-    std::string out, config_file;
-    std::vector<std::string> overrides;
+    std::string out;
+    ff::app::ConfigSources sources;
     ff::synth::SynthConfig config;
     bool no_noise = false, overwrite = false;
   };
@@ -39,13 +39,12 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--object-speed", o->config.object_speed, "RMS object speed, m/s")->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "Exact depth without holes, noise-free colour");
-  cmd->add_option("--config", o->config_file, "JSON file with SynthConfig settings");
-  cmd->add_option("--set", o->overrides, "Setting override key=value (repeatable)");
+  o->sources.addTo(cmd, "SynthConfig");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] {
     ff::synth::SynthConfig defaults = o->config;
     if (o->no_noise) defaults.noise = false;
-    const auto config = ff::resolveConfig(defaults, o->config_file, o->overrides);
+    const auto config = o->sources.resolve(defaults);
     const auto t0 = std::chrono::steady_clock::now();
     const ff::synth::SyntheticScene scene(config);
     ff::synth::writeSequence(scene, o->out, o->overwrite);
@@ -57,8 +56,8 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
 
 const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
   struct Options {
-    std::string input, out, frames, config_file;
-    std::vector<std::string> overrides;
+    std::string input, out, frames;
+    ff::app::ConfigSources sources;
     ff::synth::AugmentConfig config;
     ff::SequenceOptions sequence;
     bool no_noise = false, overwrite = false;
@@ -74,8 +73,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Colour frame range FIRST:LAST (inclusive indices)");
   cmd->add_option("--object-speed", o->config.object_speed, "RMS object speed, m/s")->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "No depth noise on the inserted objects");
-  cmd->add_option("--config", o->config_file, "JSON file with AugmentConfig settings");
-  cmd->add_option("--set", o->overrides, "Setting override key=value (repeatable)");
+  o->sources.addTo(cmd, "AugmentConfig");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] {
     ff::synth::AugmentConfig defaults = o->config;
@@ -85,7 +83,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
       defaults.first_frame = range.first;
       defaults.last_frame = range.last;
     }
-    const auto config = ff::resolveConfig(defaults, o->config_file, o->overrides);
+    const auto config = o->sources.resolve(defaults);
     const auto t0 = std::chrono::steady_clock::now();
     const auto report = ff::synth::augmentSequence(o->input, o->out, config, o->sequence, o->overwrite);
     if (!report.dropped_timestamps.empty()) {

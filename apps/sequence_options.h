@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "flowfusion/core/config.h"
+#include "config_sources.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
 
@@ -14,8 +14,7 @@ namespace ff::app {
 struct SystemOptions {
   std::string camera;
   double depth_scale = 5000.0;
-  std::string config_file;
-  std::vector<std::string> overrides;
+  ConfigSources config;
   std::string frames;
   bool no_segmentation = false;
   std::string tracking;
@@ -23,8 +22,7 @@ struct SystemOptions {
   void addTo(CLI::App* cmd) {
     cmd->add_option("--camera", camera, "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy (default: camera.txt or folder name)");
     cmd->add_option("--depth-scale", depth_scale, "Raw depth units per metre")->capture_default_str();
-    cmd->add_option("--config", config_file, "JSON configuration file (see config.json of any run)");
-    cmd->add_option("--set", overrides, "Override one setting, e.g. --set odometry.levels=3 (repeatable)");
+    config.addTo(cmd, "SystemConfig");
     cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
     cmd->add_flag("--no-segmentation", no_segmentation, "Plain robust odometry, no dynamic segmentation");
     cmd->add_option("--tracking", tracking, "frame_to_keyframe (default), frame_to_frame or frame_to_model");
@@ -38,10 +36,10 @@ struct SystemOptions {
   }
 
   SystemConfig systemConfig() const {
-    std::vector<std::string> all = overrides;
-    if (no_segmentation) all.push_back("pipeline.segmentation=false");
-    if (!tracking.empty()) all.push_back("pipeline.tracking=\"" + tracking + "\"");
-    SystemConfig c = resolveConfig(SystemConfig{}, config_file, all);
+    std::vector<std::string> flags;
+    if (no_segmentation) flags.push_back("pipeline.segmentation=false");
+    if (!tracking.empty()) flags.push_back("pipeline.tracking=\"" + tracking + "\"");
+    SystemConfig c = config.resolve(SystemConfig{}, flags);
     validate(c);
     return c;
   }

@@ -9,8 +9,10 @@
 // weighted side. Optical flow therefore runs from the current to the previous image.
 //
 // Per frame:  odometry (Eq. 1, weighted by the previous frame's scores carried over when
-// available) -> [flow residual (Eq. 8-9), clusters, scores (Eq. 10-15), weighted odometry
-// (Eq. 16)] repeated until the motion settles -> static map fusion with weights 1 - b.
+// available) -> [flow residual (Eq. 8-9), clusters, scores (Eq. 10-15, with the static map's
+// occlusion and agreement terms of ScoreConfig), weighted odometry (Eq. 16)] repeated until the
+// motion settles -> static map fusion with weights 1 - b. The frame then becomes the next
+// frame's target (previous frame or keyframe) with its static weights 1 - b as target weights.
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
