@@ -20,6 +20,7 @@ void validate(const SystemConfig& c) {
   if (p.max_iterations < 1) throw InputError("pipeline.max_iterations must be at least 1");
   if (p.refine_coarsest_level < -1 || p.refine_coarsest_level >= c.odometry.levels)
     throw InputError("pipeline.refine_coarsest_level must be -1 (the coarsest) or in [0, odometry.levels)");
+  if (p.fusion_every < 1) throw InputError("pipeline.fusion_every must be at least 1");
   if (p.refine_iterations < 1) throw InputError("pipeline.refine_iterations must be at least 1");
   if (p.segmentation_level < 0 || p.segmentation_level >= c.odometry.levels)
     throw InputError("pipeline.segmentation_level must be in [0, odometry.levels)");
@@ -249,7 +250,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, opt.mask_threshold);
   result.scores = scores;
-  if (map_) {
+  if (map_ && frames_ % config_.pipeline.fusion_every == 0) {
     t0 = std::chrono::steady_clock::now();
     map_->integrate(frame, camera_, result.T_world_cam, full_scores.empty() ? cv::Mat() : staticWeights(full_scores));
     timings_.add("fusion", since(t0));
@@ -281,6 +282,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     if (std::abs(s) < 1.0) T_world_cam_colour = orthonormalized(result.T_world_cam * expSE3(s * logSE3(T_prev_cur_velocity_)));
   }
   trajectory_.push_back({frame.timestamp, T_world_cam_colour});
+  ++frames_;
   return result;
 }
 
