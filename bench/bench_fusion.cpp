@@ -77,6 +77,20 @@ void BM_SurfelPredict(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfelPredict)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The segmentation's view of the map (stable surfels, square splats); argument: level as above.
+void BM_SurfelPredictStableDepth(benchmark::State& state) {
+  const Sequence& seq = sequence();
+  const ff::StaticMap map = warmMap(seq);
+  const ff::CameraIntrinsics camera = seq.camera.atLevel(static_cast<int>(state.range(0)));
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(map.predictStableDepth(seq.frames[i % seq.frames.size()].T_world_cam, camera));
+    ++i;
+  }
+  state.counters["surfels"] = static_cast<double>(map.size());
+}
+BENCHMARK(BM_SurfelPredictStableDepth)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // What the pipeline does per frame: fuse the frame, then predict the model at its pose for the next
 // frame's tracking. Argument: prediction level as above.
 void BM_SurfelIntegratePredict(benchmark::State& state) {

@@ -197,7 +197,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       seg_frame.depth = cur.level(seg_level).depth;
       const ClusterGraph graph = clusterer_->cluster(seg_frame, seg_camera);
       timings_.add("clustering", since(t0));
-      // The static map seen from the current estimate: what lies in front of it is not background.
+      // The static map seen from the current estimate: what lies in front of it is not background,
+      // what coincides with it is.
       cv::Mat r_M, a_M;
       if (map_ && map_->size() > 0 && (config_.scores.alpha_M > 0 || config_.scores.model_agreement > 0)) {
         t0 = std::chrono::steady_clock::now();
