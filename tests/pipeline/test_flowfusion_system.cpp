@@ -40,6 +40,7 @@ struct RunResult {
   double dynamic_fraction = 0;   // dynamic pixels over all pixels of all frames
   double mean_iou = 0;           // over frames where a moving object covers >= 1 % of the image
   int iou_frames = 0;
+  int model_frames = 0;          // frames aligned to the map's prediction
 };
 
 double iou(const cv::Mat& gt, const cv::Mat& est) {
@@ -48,9 +49,10 @@ double iou(const cv::Mat& gt, const cv::Mat& est) {
   return uni == 0 ? 1.0 : static_cast<double>(inter) / uni;
 }
 
-RunResult runOn(const synth::SyntheticScene& scene, bool segmentation) {
+RunResult runOn(const synth::SyntheticScene& scene, bool segmentation, const std::string& tracking = {}) {
   SystemConfig config;
   config.pipeline.segmentation = segmentation;
+  if (!tracking.empty()) config.pipeline.tracking = tracking;
   FlowFusionSystem system(config, scene.camera(), scene.cameraPose(0));
   Trajectory gt;
   RunResult out;
@@ -61,6 +63,7 @@ RunResult runOn(const synth::SyntheticScene& scene, bool segmentation) {
     const FrameResult r = system.process(f.frame);
     EXPECT_EQ(r.dynamic_mask.size(), f.mask.size());
     dynamic_pixels += cv::countNonZero(r.dynamic_mask);
+    out.model_frames += r.used_model ? 1 : 0;
     pixels += static_cast<double>(f.mask.total());
     // Frame 0 has no previous frame to compare with, so nothing can be segmented there.
     if (i > 0 && cv::countNonZero(f.mask) >= 0.01 * static_cast<double>(f.mask.total())) {
@@ -86,6 +89,16 @@ const RunResult& dynamicRun() {
 const RunResult& dynamicRunNoSegmentation() {
   static const RunResult r = runOn(synth::SyntheticScene(smallScene(2)), false);
   return r;
+}
+
+TEST(FlowFusionSystem, FrameToModelTracksAgainstTheMap) {
+  const RunResult r = runOn(synth::SyntheticScene(smallScene(0)), true, "frame_to_model");
+  std::cout << "frame to model: " << r.model_frames << " of 39 frames aligned to the map, ATE "
+            << 1e3 * r.ate_rmse_m << " mm\n";
+  // Measured: 39 of 39, ATE 1.7 mm (9.4 mm when the prediction kept the nearest disc intersection
+  // per pixel: noisy discs tilted towards the camera biased the model's depth by -12 mm).
+  EXPECT_GE(r.model_frames, 30);
+  EXPECT_LT(r.ate_rmse_m, 0.005);
 }
 
 TEST(FlowFusionSystem, StaticSceneStaysStaticAndIsTrackedWell) {

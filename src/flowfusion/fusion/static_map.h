@@ -12,8 +12,9 @@
 // - This surfel map integrates at 320x240 in 9-13 ms and predicts 320x240 in 9 ms, 640x480 in
 //   23-44 ms (ray-disc splatting, so planes come out exact): integrate + predict 17 ms per frame
 //   with a 320x240 prediction, 30 ms at 640x480 (BM_SurfelIntegratePredict). Since the z-buffers
-//   are per thread (no atomics), on an idle machine: integrate 6.5 ms, predict 7.9 ms at 320x240,
-//   17.7 ms at 640x480, predictStableDepth 3.7 ms at 320x240 (~200k surfels). On exact synthetic
+//   are per thread (no atomics), on an idle machine: integrate 6.5 ms, predictStableDepth 3.6 ms
+//   at 320x240 (~200k surfels); predict with its second, depth-averaging pass 17.7 ms at 320x240,
+//   41 ms at 640x480 (7.9 and 17.7 ms with one pass). On exact synthetic
 //   data the map points lie 0.03 mm (mean) from the true planes and the prediction at a fused pose
 //   reproduces the depth to < 0.01 mm median (tests/fusion).
 // - Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
@@ -127,9 +128,11 @@ class StaticMap {
   void integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                  const cv::Mat& static_weight = {});
 
-  // Renders the model at T_world_cam with `camera` (any resolution): every pixel's ray meets the
-  // nearest surfel disc. Unstable surfels observed in the last frame are drawn too (tracking wants
-  // every surface it just saw).
+  // Renders the model at T_world_cam with `camera` (any resolution): colour, intensity and normal
+  // of the nearest surfel whose disc the pixel's ray meets, depth the confidence-weighted mean of
+  // the discs it meets near that front surface (two passes; one alone is biased towards the camera
+  // by the noise). Unstable surfels observed in the last frame are drawn too (tracking wants every
+  // surface it just saw).
   ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
 
   // Depth (CV_32FC1, metres, 0 = none) of the stable surfels only, each splatted as a square of its

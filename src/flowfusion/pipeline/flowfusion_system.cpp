@@ -150,15 +150,20 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     const SE3 T_target_prev = T_world_target.inverse() * prev_->T_world_cam;
     if (opt.tracking == "frame_to_model" && map_ && map_->size() > 0) {
       t0 = std::chrono::steady_clock::now();
-      const ModelPrediction pred = map_->predict(prev_->T_world_cam, camera_);
+      // Rendered at the odometry's finest level (the finer input levels are never aligned) and
+      // brought to the input size, where the pyramid's 2x2 averages give it back unchanged.
+      const int finest = config_.odometry.finest_level;
+      const ModelPrediction pred = map_->predict(prev_->T_world_cam, camera_.atLevel(finest));
       const double covered = cv::countNonZero(pred.depth > 0);
-      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_->frame.depth > 0);
+      const cv::Mat& prev_depth = finest == 0 ? prev_->frame.depth : prev_->odo.level(finest).depth;
+      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_depth > 0);
       if (covered >= needed) {
         // The model's depth is averaged over many frames (less noise, less drift); its colour is
         // blurred by the surfel splats, so the previous image stays the photometric target.
         // Where the model has no surface the previous frame's depth fills in.
-        cv::Mat depth = pred.depth.clone();
-        prev_->frame.depth.copyTo(depth, pred.depth <= 0);
+        cv::Mat depth;
+        cv::resize(pred.depth, depth, prev_->frame.depth.size(), 0, 0, cv::INTER_NEAREST);
+        prev_->frame.depth.copyTo(depth, depth <= 0);
         model = prepareOdometryFrame(prev_->frame.intensity, depth, camera_, config_.odometry);
         target = &model;
         result.used_model = true;
