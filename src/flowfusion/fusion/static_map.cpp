@@ -57,7 +57,7 @@ struct Measurement {
   float radius = 0;
 };
 
-// A surfel seen from one camera. Renderers keep, per pixel, the surfel whose CENTRE is nearest
+// A surfel seen from one camera. predict() keeps, per pixel, the surfel whose CENTRE is nearest
 // (not the nearest intersection with a disc: with noisy normals neighbouring discs tilt towards
 // the camera, and the nearest of several intersections lay 12 mm in front of the measured surface
 // at the median on a noisy synthetic frame, against 8 mm for the nearest centre).
@@ -418,9 +418,11 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
   // for the front surfel, 0.0 mm for the mean; frame-to-model ATE on the static synthetic twin
   // of seed 2: 31 mm before, 3.6 mm after).
   std::vector<float> front(pixels, 0.0f);
-  for (size_t p = 0; p < pixels; ++p)
-    if (zbuffer[p] != kEmpty)
-      front[p] = view.planeDepth(surfels_[keyIndex(zbuffer[p])], static_cast<int>(p % w), static_cast<int>(p / w));
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p < r.end(); ++p)
+      if (zbuffer[p] != kEmpty)
+        front[p] = view.planeDepth(surfels_[keyIndex(zbuffer[p])], static_cast<int>(p % w), static_cast<int>(p / w));
+  });
   const float band = static_cast<float>(config_.association_distance_m);
   tbb::enumerable_thread_specific<std::vector<Eigen::Vector2f>> sums(
       [pixels] { return std::vector<Eigen::Vector2f>(pixels, Eigen::Vector2f::Zero()); });
@@ -471,7 +473,6 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float f = std::max(fx, fy);
   const float min_depth = static_cast<float>(config_.min_depth_m);
-  const CameraView view{R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth};
   const float stable = static_cast<float>(config_.stable_confidence);
   constexpr float kMaxHalfSplat = 4;  // pixels; see predict()
   const size_t pixels = static_cast<size_t>(w) * h;
@@ -489,16 +490,24 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
     const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
     const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
     const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
-    const uint64_t centre_key = depthKey(pc.z(), static_cast<uint32_t>(k));
+    // Depth of the surfel's plane along each pixel's ray; the centre's where the plane is seen
+    // edge-on.
+    const Eigen::Vector3f nc = R_cam_world * s.normal;
+    const float n_dot_p = nc.dot(pc);
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) write(static_cast<size_t>(y) * w + x, centre_key);
+      for (int x = x0; x <= x1; ++x) {
+        const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
+        float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : pc.z();
+        if (!(z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z())) z = pc.z();
+        write(static_cast<size_t>(y) * w + x, depthKey(z, static_cast<uint32_t>(k)));
+      }
   });
   cv::Mat depth(h, w, CV_32FC1);
   for (int y = 0; y < h; ++y) {
     float* row = depth.ptr<float>(y);
     for (int x = 0; x < w; ++x) {
       const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
-      row[x] = key == kEmpty ? 0.0f : view.planeDepth(surfels_[keyIndex(key)], x, y);
+      row[x] = key == kEmpty ? 0.0f : keyDepth(key);
     }
   }
   return depth;

@@ -13,8 +13,8 @@
 //   23-44 ms (ray-disc splatting, so planes come out exact): integrate + predict 17 ms per frame
 //   with a 320x240 prediction, 30 ms at 640x480 (BM_SurfelIntegratePredict). Since the z-buffers
 //   are per thread (no atomics), on an idle machine: integrate 6.5 ms, predictStableDepth 3.6 ms
-//   at 320x240 (~200k surfels); predict with its second, depth-averaging pass 17.7 ms at 320x240,
-//   41 ms at 640x480 (7.9 and 17.7 ms with one pass). On exact synthetic
+//   at 320x240 (~200k surfels); predict with its second, depth-averaging pass 16.8 ms at 320x240,
+//   38 ms at 640x480 (7.9 and 17.7 ms with one pass). On exact synthetic
 //   data the map points lie 0.03 mm (mean) from the true planes and the prediction at a fused pose
 //   reproduces the depth to < 0.01 mm median (tests/fusion).
 // - Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
