@@ -58,7 +58,10 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
   o.export_map = false;
   if (!c.system.frames.empty()) o.frames = parseFrameRange(c.system.frames);
   const RunSummary s = runSequence(seq, config, o);
-  Row row{label, method, s.frames};
+  Row row;
+  row.sequence = label;
+  row.method = method;
+  row.frames = s.frames;
   addTrajectoryErrors(row, seq, s.trajectory);
   row.total_ms = eval::median(s.timings.frameTotals());
   for (const auto& stage : kStages)
@@ -87,7 +90,10 @@ Row runReference(const TumSequence& seq, const std::string& label, const std::st
     if (r.last >= 0) max_frames = static_cast<size_t>(r.last) + 1;
   }
   const eval::ReferenceRun run = eval::runReferenceOdometry(kind, seq, max_frames);
-  Row row{label, kind == "rgbd" ? "opencv-RgbdOdometry" : "opencv-RgbdICPOdometry", run.trajectory.size()};
+  Row row;
+  row.sequence = label;
+  row.method = kind == "rgbd" ? "opencv-RgbdOdometry" : "opencv-RgbdICPOdometry";
+  row.frames = run.trajectory.size();
   addTrajectoryErrors(row, seq, run.trajectory);
   row.total_ms = run.median_ms;
   row.stage_ms.assign(kStages.size(), NAN);

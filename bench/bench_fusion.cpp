@@ -1,8 +1,8 @@
 // Micro-benchmarks of the static map (issue 5): fusion and model prediction per 640x480 frame of a
 // noisy synthetic sequence with two moving objects (ground-truth masks as weights), and Open3D's
 // legacy ScalableTSDFVolume integration of the same frames as the alternative that was measured.
-//   build-*/bench/flowfusion_microbench --benchmark_filter='Surfel|Tsdf' \
-//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Surfel|Tsdf'
+//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one command line)
 // Counters: surfels = map size at the end of the run.
 #include <benchmark/benchmark.h>
 
