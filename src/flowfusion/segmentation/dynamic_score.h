@@ -20,8 +20,9 @@ struct ScoreConfig {
   // (pairs 0-1, 60-61, ..., 240-241; tests/segmentation/test_scores_fr1.cpp) have motion deltas
   // of median 0.075, p90 0.15, p99 0.27, so (0.1, 0.3) flags some of them in isolated frames; the
   // map's agreement term below removes most of those. Measured on whole sequences (flowfusion
-  // run, defaults otherwise; ATE mm / pooled IoU; synth seeds 1, 2, 4, 5, 6 of `flowfusion synth
-  // --frames 150`, fr1 augmented = `flowfusion augment` of the shared frames, seed 1):
+  // run, defaults otherwise but pipeline.fusion_every = 1; ATE mm / pooled IoU; synth seeds 1, 2,
+  // 4, 5, 6 of `flowfusion synth --frames 150`, fr1 augmented = `flowfusion augment` of the shared
+  // frames, seed 1; with fusion_every = 2 see PipelineOptions):
   //   setting                 seed 1      seed 2      seed 4      seed 5      seed 6      fr1 aug
   //   defaults               6.3 / .96   2.6 / .84   2.7 / .88   2.0 / .76   6.0 / .58   16.0 / .62
   //   theta_b 0.08           6.1 / .96   3.0 / .84   3.0 / .87   1.9 / .75   5.8 / .59   16.3 / .62
