@@ -1,8 +1,8 @@
 // Micro-benchmarks of optical flow, flow residuals, clustering and the score solve, with
 // accuracy counters measured on the analytic test scene (tests/flow/analytic_scene.h), whose
 // true flow is known: static pixels move by egoFlow() of the true depth and motion.
-//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score' \
-//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score'
+//     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one command line)
 // Counters: epe_px = mean end-point error over static, unoccluded pixels that stay in view;
 // straddle = fraction of clusters with >= 10 % of their pixels on each side of the moving
 // box's outline; leak = fraction of box pixels in clusters that are < 90 % box.

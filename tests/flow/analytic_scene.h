@@ -82,7 +82,7 @@ struct AnalyticScene {
           const Eigen::Vector3d d = R * d_cam;
           // Ray parameter t along d_cam equals the camera-frame depth.
           double t_best = std::numeric_limits<double>::infinity();
-          Eigen::Vector3d tex_point;
+          Eigen::Vector3d tex_point = Eigen::Vector3d::Zero();
           bool on_box = false;
           if (std::abs(d.z()) > 1e-9) {
             const double t = (wall_z - o.z()) / d.z();
