@@ -66,16 +66,28 @@ struct CameraView {
   Eigen::Vector3f t_cam_world;
   float fx, fy, cx, cy, min_depth;
 
+  CameraView(const SE3& T_world_cam, const CameraIntrinsics& camera, double min_depth_m) {
+    const SE3 T_cam_world = T_world_cam.inverse();
+    R_cam_world = T_cam_world.linear().cast<float>();
+    t_cam_world = T_cam_world.translation().cast<float>();
+    fx = static_cast<float>(camera.fx);
+    fy = static_cast<float>(camera.fy);
+    cx = static_cast<float>(camera.cx);
+    cy = static_cast<float>(camera.cy);
+    min_depth = static_cast<float>(min_depth_m);
+  }
+
   float centreDepth(const Surfel& s) const { return (R_cam_world * s.position + t_cam_world).z(); }
 
-  // Depth of the surfel's plane along pixel (x, y)'s ray; its centre's depth where the plane is
-  // seen nearly edge-on or the hit lands far from the centre.
-  float planeDepth(const Surfel& s, int x, int y) const {
-    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-    const Eigen::Vector3f nc = R_cam_world * s.normal;
+  // Depth along pixel (x, y)'s ray of the plane through pc with normal nc (camera frame); pc's
+  // depth where the plane is seen nearly edge-on or the hit lands far from pc.
+  float planeDepth(const Eigen::Vector3f& pc, const Eigen::Vector3f& nc, int x, int y) const {
     const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
     const float z = std::abs(denom) > 1e-3f ? nc.dot(pc) / denom : pc.z();
     return z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z() ? z : pc.z();
+  }
+  float planeDepth(const Surfel& s, int x, int y) const {
+    return planeDepth(R_cam_world * s.position + t_cam_world, R_cam_world * s.normal, x, y);
   }
 };
 
@@ -353,13 +365,8 @@ void StaticMap::updateKeyframes(const SE3& T_world_cam, const CameraIntrinsics& 
 ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
-  const SE3 T_cam_world = T_world_cam.inverse();
-  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
-  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
-  const float min_depth = static_cast<float>(config_.min_depth_m);
-  const CameraView view{R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth};
+  const CameraView view(T_world_cam, camera, config_.min_depth_m);
+  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
   // Discs larger than this (radius, pixels) are clipped: only views much closer than any fused one
   // produce them, and the cost grows with the square.
   constexpr int kMaxHalfSplat = 8;
@@ -466,13 +473,9 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
 cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
-  const SE3 T_cam_world = T_world_cam.inverse();
-  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
-  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const CameraView view(T_world_cam, camera, config_.min_depth_m);
+  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
   const float f = std::max(fx, fy);
-  const float min_depth = static_cast<float>(config_.min_depth_m);
   const float stable = static_cast<float>(config_.stable_confidence);
   constexpr float kMaxHalfSplat = 4;  // pixels; see predict()
   const size_t pixels = static_cast<size_t>(w) * h;
@@ -490,17 +493,10 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
     const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
     const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
     const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
-    // Depth of the surfel's plane along each pixel's ray; the centre's where the plane is seen
-    // edge-on.
     const Eigen::Vector3f nc = R_cam_world * s.normal;
-    const float n_dot_p = nc.dot(pc);
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
-        float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : pc.z();
-        if (!(z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z())) z = pc.z();
-        write(static_cast<size_t>(y) * w + x, depthKey(z, static_cast<uint32_t>(k)));
-      }
+      for (int x = x0; x <= x1; ++x)
+        write(static_cast<size_t>(y) * w + x, depthKey(view.planeDepth(pc, nc, x, y), static_cast<uint32_t>(k)));
   });
   cv::Mat depth(h, w, CV_32FC1);
   for (int y = 0; y < h; ++y) {
