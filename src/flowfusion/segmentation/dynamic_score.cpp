@@ -29,6 +29,22 @@ void checkResidual(const cv::Mat& r, const cv::Mat& labels, const char* name) {
     throw InputError(std::string("scores: residual ") + name + " size differs from the cluster labels");
 }
 
+// out(u, v) = compare(z, z_model) where both depths are valid, NaN elsewhere.
+template <class Compare>
+cv::Mat compareToModel(const cv::Mat& depth, const cv::Mat& model_depth, const char* what, Compare compare) {
+  if (depth.type() != CV_32FC1 || model_depth.type() != CV_32FC1 || depth.size() != model_depth.size())
+    throw InputError(std::string(what) + ": depth and model depth must be CV_32FC1 of one size");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat out(depth.size(), CV_32FC1);
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* z = depth.ptr<float>(v);
+    const float* zm = model_depth.ptr<float>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < depth.cols; ++u) o[u] = (z[u] > 0 && zm[u] > 0) ? compare(z[u], zm[u]) : nan;
+  }
+  return out;
+}
+
 }  // namespace
 
 double scoreTarget(double delta, double theta_b, double theta_t) {
@@ -159,35 +175,15 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
 }
 
 cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double margin) {
-  if (depth.type() != CV_32FC1 || model_depth.type() != CV_32FC1 || depth.size() != model_depth.size())
-    throw InputError("modelOcclusion: depth and model depth must be CV_32FC1 of one size");
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   const float m = static_cast<float>(margin);
-  cv::Mat out(depth.size(), CV_32FC1);
-  for (int v = 0; v < depth.rows; ++v) {
-    const float* z = depth.ptr<float>(v);
-    const float* zm = model_depth.ptr<float>(v);
-    float* o = out.ptr<float>(v);
-    for (int u = 0; u < depth.cols; ++u)
-      o[u] = (z[u] > 0 && zm[u] > 0) ? std::max(0.f, zm[u] - z[u] * (1 + m)) : nan;
-  }
-  return out;
+  return compareToModel(depth, model_depth, "modelOcclusion",
+                        [m](float z, float zm) { return std::max(0.f, zm - z * (1 + m)); });
 }
 
 cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin) {
-  if (depth.type() != CV_32FC1 || model_depth.type() != CV_32FC1 || depth.size() != model_depth.size())
-    throw InputError("modelAgreement: depth and model depth must be CV_32FC1 of one size");
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   const float m = static_cast<float>(margin);
-  cv::Mat out(depth.size(), CV_32FC1);
-  for (int v = 0; v < depth.rows; ++v) {
-    const float* z = depth.ptr<float>(v);
-    const float* zm = model_depth.ptr<float>(v);
-    float* o = out.ptr<float>(v);
-    for (int u = 0; u < depth.cols; ++u)
-      o[u] = (z[u] > 0 && zm[u] > 0) ? (std::abs(zm[u] - z[u]) <= m * z[u] ? 1.f : 0.f) : nan;
-  }
-  return out;
+  return compareToModel(depth, model_depth, "modelAgreement",
+                        [m](float z, float zm) { return std::abs(zm - z) <= m * z ? 1.f : 0.f; });
 }
 
 cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores) {
