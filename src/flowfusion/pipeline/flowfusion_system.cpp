@@ -256,7 +256,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, opt.mask_threshold);
   result.scores = scores;
-  if (map_ && frames_ % config_.pipeline.fusion_every == 0) {
+  // trajectory_ holds one pose per frame processed before this one.
+  if (map_ && trajectory_.size() % static_cast<size_t>(config_.pipeline.fusion_every) == 0) {
     t0 = std::chrono::steady_clock::now();
     map_->integrate(frame, camera_, result.T_world_cam, full_scores.empty() ? cv::Mat() : staticWeights(full_scores));
     timings_.add("fusion", since(t0));
@@ -288,7 +289,6 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     if (std::abs(s) < 1.0) T_world_cam_colour = orthonormalized(result.T_world_cam * expSE3(s * logSE3(T_prev_cur_velocity_)));
   }
   trajectory_.push_back({frame.timestamp, T_world_cam_colour});
-  ++frames_;
   return result;
 }
 

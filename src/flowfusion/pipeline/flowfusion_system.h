@@ -133,7 +133,6 @@ class FlowFusionSystem {
   Trajectory trajectory_;
   eval::Timings timings_;
   int failures_ = 0;
-  int frames_ = 0;                              // frames processed
 };
 
 }  // namespace ff
