@@ -60,7 +60,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
     ff::app::ConfigSources sources;
     ff::synth::AugmentConfig config;
     ff::SequenceOptions sequence;
-    bool no_noise = false, overwrite = false;
+    bool no_noise = false, no_undistort = false, overwrite = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -69,10 +69,13 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
   cmd->add_option("OUT", o->out, "Output folder")->required();
   cmd->add_option("--seed", o->config.seed, "Random seed (objects, paths, noise)")->capture_default_str();
   cmd->add_option("--objects", o->config.objects, "Number of inserted objects")->capture_default_str();
-  cmd->add_option("--camera", o->sequence.camera, "Intrinsics: fr1|fr2|fr3 or fx,fy,cx,cy (default: detect)");
+  cmd->add_option("--camera", o->sequence.camera,
+                  "Intrinsics: fr1|fr2|fr3 or fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]] (default: detect); the "
+                  "output is undistorted and its camera.txt pinhole");
   cmd->add_option("--frames", o->frames, "Colour frame range FIRST:LAST (inclusive indices)");
   cmd->add_option("--object-speed", o->config.object_speed, "RMS object speed, m/s")->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "No depth noise on the inserted objects");
+  cmd->add_flag("--no-undistort", o->no_undistort, "Keep the raw images (ignore the camera's lens distortion)");
   o->sources.addTo(cmd, "AugmentConfig");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] {
@@ -84,6 +87,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
       defaults.last_frame = range.last;
     }
     const auto config = o->sources.resolve(defaults);
+    o->sequence.undistort = !o->no_undistort;
     const auto t0 = std::chrono::steady_clock::now();
     const auto report = ff::synth::augmentSequence(o->input, o->out, config, o->sequence, o->overwrite);
     if (!report.dropped_timestamps.empty()) {

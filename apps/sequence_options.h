@@ -17,10 +17,14 @@ struct SystemOptions {
   ConfigSources config;
   std::string frames;
   bool no_segmentation = false;
+  bool no_undistort = false;
   std::string tracking;
 
   void addTo(CLI::App* cmd) {
-    cmd->add_option("--camera", camera, "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy (default: camera.txt or folder name)");
+    cmd->add_option("--camera", camera,
+                    "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]] (default: camera.txt or "
+                    "folder name)");
+    cmd->add_flag("--no-undistort", no_undistort, "Feed the raw images to the pinhole model (ignore lens distortion)");
     cmd->add_option("--depth-scale", depth_scale, "Raw depth units per metre")->capture_default_str();
     config.addTo(cmd, "SystemConfig");
     cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
@@ -32,6 +36,7 @@ struct SystemOptions {
     SequenceOptions s;
     s.camera = camera;
     s.depth_scale = depth_scale;
+    s.undistort = !no_undistort;
     return s;
   }
 

@@ -188,8 +188,13 @@ TEST(TumSequence, FolderNamePicksFreiburgPreset) {
   const CameraIntrinsics fr2 = *freiburgPreset(2);
   EXPECT_DOUBLE_EQ(s.camera().fx, fr2.fx);
   EXPECT_DOUBLE_EQ(s.camera().cy, fr2.cy);
+  EXPECT_DOUBLE_EQ(s.distortion().k1, freiburgDistortion(2)->k1);
+  EXPECT_NE(s.undistorter(), nullptr);
   // The preset is 640x480, these images are not: loading says so.
   expectInputError([&] { s.load(0); }, {"640x480"});
+  SequenceOptions raw;
+  raw.undistort = false;
+  EXPECT_EQ(TumSequence::open(f.str(), raw).undistorter(), nullptr);
 }
 
 TEST(TumSequence, CameraOptionOverrides) {
@@ -216,6 +221,20 @@ TEST(TumSequence, BadCameraFile) {
   expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "positive"});
   writeText(f.root / "camera.txt", "# nothing\n");
   expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt", "no intrinsics"});
+  writeText(f.root / "camera.txt", "50 51 31.5 23.5 64 48 0.1 0.2\n");
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "k1 k2 p1 p2 k3"});
+}
+
+TEST(TumSequence, CameraFileWithDistortionUndistortsOnLoading) {
+  testing::TempDir tmp;
+  Folder f(tmp.path() / "seq");
+  writeText(f.root / "camera.txt", "50 51 31.5 23.5 64 48 0.1 -0.05 0 0 0\n");
+  const TumSequence s = TumSequence::open(f.str());
+  EXPECT_DOUBLE_EQ(s.distortion().k1, 0.1);
+  ASSERT_NE(s.undistorter(), nullptr);
+  const RgbdFrame frame = s.load(0);
+  EXPECT_EQ(frame.width(), kW);
+  EXPECT_EQ(frame.height(), kH);
 }
 
 TEST(TumSequence, WriterRoundTrip) {

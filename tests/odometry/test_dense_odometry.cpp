@@ -214,7 +214,7 @@ TEST(DenseOdometryTargetWeights, MovingObjectInTheTargetIsIgnored) {
     const double t = scene.timestamp(k);
     const auto a = scene.renderAt(T_world_a, t + 0.2);
     const auto b = scene.renderAt(T_world_a * delta, t);
-    if (cv::countNonZero(b.mask) < b.mask.total() / 20) continue;  // the objects must be in view
+    if (static_cast<size_t>(cv::countNonZero(b.mask)) < b.mask.total() / 20) continue;  // the objects must be in view
     const OdometryFrame fa = prepareOdometryFrame(a.frame.intensity, a.frame.depth, scene.camera(), c);
     OdometryFrame fb = prepareOdometryFrame(b.frame.intensity, b.frame.depth, scene.camera(), c);
     const OdometryResult without = odo.estimate(fa, fb, SE3::Identity(), weights(a.mask));

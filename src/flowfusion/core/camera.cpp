@@ -1,5 +1,6 @@
 #include "flowfusion/core/camera.h"
 
+#include <cmath>
 #include <sstream>
 #include <vector>
 
@@ -37,11 +38,26 @@ std::optional<CameraIntrinsics> freiburgPreset(int n) {
   }
 }
 
-CameraIntrinsics parseCamera(const std::string& spec_in, const std::string& what) {
+std::optional<LensDistortion> freiburgDistortion(int n) {
+  switch (n) {
+    case 1: return LensDistortion{0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+    case 2: return LensDistortion{0.2312, -0.7849, -0.0033, -0.0001, 0.9172};
+    case 3: return LensDistortion{};
+    default: return std::nullopt;
+  }
+}
+
+CameraIntrinsics parseCamera(const std::string& spec, const std::string& what) {
+  return parseCameraModel(spec, what).intrinsics;
+}
+
+CameraModel parseCameraModel(const std::string& spec_in, const std::string& what) {
   std::string spec;
   for (char ch : spec_in)
     if (ch != ' ' && ch != '\t' && ch != '\n' && ch != '\r') spec += ch;
-  if (spec == "fr1" || spec == "fr2" || spec == "fr3") return *freiburgPreset(spec[2] - '0');
+  const std::string expected = "' is not fr1, fr2, fr3 or fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]]";
+  if (spec == "fr1" || spec == "fr2" || spec == "fr3")
+    return {*freiburgPreset(spec[2] - '0'), *freiburgDistortion(spec[2] - '0')};
   std::vector<double> v;
   std::stringstream ss(spec);
   std::string item;
@@ -51,18 +67,21 @@ CameraIntrinsics parseCamera(const std::string& spec_in, const std::string& what
       v.push_back(std::stod(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw InputError(what + ": '" + spec_in + "' is not fr1, fr2, fr3 or fx,fy,cx,cy[,width,height]");
+      throw InputError(what + ": '" + spec_in + expected);
     }
   }
-  if (v.size() != 4 && v.size() != 6)
-    throw InputError(what + ": '" + spec_in + "' is not fr1, fr2, fr3 or fx,fy,cx,cy[,width,height]");
-  CameraIntrinsics c{v[0], v[1], v[2], v[3], 640, 480};
-  if (v.size() == 6) {
-    c.width = static_cast<int>(v[4]);
-    c.height = static_cast<int>(v[5]);
+  if (v.size() != 4 && v.size() != 6 && v.size() != 11) throw InputError(what + ": '" + spec_in + expected);
+  for (double x : v)
+    if (!std::isfinite(x)) throw InputError(what + ": '" + spec_in + "' holds a value that is not finite");
+  CameraModel m;
+  m.intrinsics = CameraIntrinsics{v[0], v[1], v[2], v[3], 640, 480};
+  if (v.size() >= 6) {
+    m.intrinsics.width = static_cast<int>(v[4]);
+    m.intrinsics.height = static_cast<int>(v[5]);
   }
-  if (!c.valid()) throw InputError(what + ": '" + spec_in + "' has a non-positive focal length or size");
-  return c;
+  if (v.size() == 11) m.distortion = LensDistortion{v[6], v[7], v[8], v[9], v[10]};
+  if (!m.intrinsics.valid()) throw InputError(what + ": '" + spec_in + "' has a non-positive focal length or size");
+  return m;
 }
 
 }  // namespace ff

@@ -1,5 +1,7 @@
 #pragma once
-// Pinhole camera intrinsics and the Freiburg presets of the TUM RGB-D benchmark.
+// Pinhole camera intrinsics, lens distortion and the Freiburg presets of the TUM RGB-D benchmark.
+// Every stage works with the pinhole model; a sequence with lens distortion is undistorted when
+// its frames are loaded (core/undistortion.h).
 #include <Eigen/Core>
 #include <optional>
 #include <string>
@@ -28,9 +30,27 @@ struct CameraIntrinsics {
   bool valid() const { return fx > 0 && fy > 0 && width > 0 && height > 0; }
 };
 
-// "fr1", "fr2", "fr3" (TUM RGB-D benchmark, 640x480) or "fx,fy,cx,cy" (640x480 unless
-// "fx,fy,cx,cy,width,height"). Throws InputError naming `what` on anything else.
+// Radial (k1, k2, k3) and tangential (p1, p2) coefficients of the Brown-Conrady model, in
+// OpenCV's order and convention; all zero = a pinhole lens.
+struct LensDistortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  bool none() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
+};
+
+struct CameraModel {
+  CameraIntrinsics intrinsics;
+  LensDistortion distortion;
+};
+
+// "fr1", "fr2", "fr3" (TUM RGB-D benchmark, 640x480, with the benchmark's distortion
+// coefficients) or "fx,fy,cx,cy" (640x480 unless "fx,fy,cx,cy,width,height"; distortion
+// coefficients may follow the size: "...,width,height,k1,k2,p1,p2,k3"). Throws InputError naming
+// `what` on anything else.
+CameraModel parseCameraModel(const std::string& spec, const std::string& what = "--camera");
 CameraIntrinsics parseCamera(const std::string& spec, const std::string& what = "--camera");
 std::optional<CameraIntrinsics> freiburgPreset(int n);
+// The benchmark's published coefficients of the colour camera (the depth images are registered
+// to it, so they share them); fr3's images were undistorted before publication (zero).
+std::optional<LensDistortion> freiburgDistortion(int n);
 
 }  // namespace ff

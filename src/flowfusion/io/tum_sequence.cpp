@@ -1,5 +1,6 @@
 #include "flowfusion/io/tum_sequence.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -34,19 +35,23 @@ std::vector<std::pair<double, std::string>> readFileList(const std::string& path
   return out;
 }
 
-CameraIntrinsics readCameraFile(const std::string& path) {
-  RecordReader in(path, "camera file", "fx fy cx cy width height', or 'fr1|fr2|fr3");
+CameraModel readCameraFile(const std::string& path) {
+  RecordReader in(path, "camera file", "fx fy cx cy width height [k1 k2 p1 p2 k3]', or 'fr1|fr2|fr3");
   if (!in.next()) in.fail("camera file holds no intrinsics");
   std::string word;
   in.fields() >> word;
-  if (word == "fr1" || word == "fr2" || word == "fr3") return parseCamera(word, path);
+  if (word == "fr1" || word == "fr2" || word == "fr3") return parseCameraModel(word, path);
   std::istringstream nums(in.line());
-  double v[6];
-  for (double& x : v)
-    if (!(nums >> x)) in.malformed();
-  CameraIntrinsics c{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
-  if (!c.valid()) in.fail("focal lengths and image size must be positive");
-  return c;
+  std::vector<double> v;
+  for (double x; nums >> x;) v.push_back(x);
+  if (!nums.eof() || (v.size() != 6 && v.size() != 11)) in.malformed();
+  for (double x : v)
+    if (!std::isfinite(x)) in.malformed();
+  CameraModel m;
+  m.intrinsics = CameraIntrinsics{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
+  if (v.size() == 11) m.distortion = LensDistortion{v[6], v[7], v[8], v[9], v[10]};
+  if (!m.intrinsics.valid()) in.fail("focal lengths and image size must be positive");
+  return m;
 }
 
 void writeCameraFile(const std::string& path, const CameraIntrinsics& c) {
@@ -66,18 +71,21 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
 
   const fs::path root(dir);
   if (!options.camera.empty()) {
-    s.camera_ = parseCamera(options.camera);
+    s.camera_ = parseCameraModel(options.camera);
   } else if (fs::exists(root / "camera.txt")) {
     s.camera_ = readCameraFile((root / "camera.txt").string());
   } else {
     std::string name = fs::weakly_canonical(root).filename().string();
     std::smatch m;
     if (std::regex_search(name, m, std::regex("^(rgbd_dataset_freiburg|fr)([123])_")))
-      s.camera_ = *freiburgPreset(m[2].str()[0] - '0');
+      s.camera_ = parseCameraModel("fr" + m[2].str());
     else
       throw InputError(dir + ": no camera intrinsics: give --camera fr1|fr2|fr3|fx,fy,cx,cy, put a camera.txt "
                              "('fx fy cx cy width height') in the folder, or name it rgbd_dataset_freiburgN_*");
   }
+
+  if (options.undistort && !s.camera_.distortion.none())
+    s.undistorter_ = std::make_shared<Undistorter>(s.camera_.intrinsics, s.camera_.distortion);
 
   const auto rgb = readFileList((root / "rgb.txt").string());
   const auto depth = readFileList((root / "depth.txt").string());
@@ -116,12 +124,17 @@ RgbdFrame TumSequence::load(size_t i) const {
                      std::to_string(depth.elemSize1() * 8) + "-bit, " + std::to_string(depth.channels()) +
                      " channel(s))");
   const auto check = [&](const cv::Mat& m, const std::string& path) {
-    if (m.cols != camera_.width || m.rows != camera_.height)
+    const CameraIntrinsics& c = camera_.intrinsics;
+    if (m.cols != c.width || m.rows != c.height)
       throw InputError(path + ": image is " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
-                       ", the camera is " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+                       ", the camera is " + std::to_string(c.width) + "x" + std::to_string(c.height));
   };
   check(color, e.rgb_path);
   check(depth, e.depth_path);
+  if (undistorter_) {
+    color = undistorter_->undistortColor(color);
+    depth = undistorter_->undistortDepth(depth);
+  }
   RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
   frame.depth_timestamp = e.depth_timestamp;
   return frame;

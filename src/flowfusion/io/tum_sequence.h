@@ -3,12 +3,14 @@
 // lines, '#' comments), rgb/ and depth/ PNGs, optional groundtruth.txt, and optionally a
 // camera.txt with the intrinsics and masks/<timestamp>.png with ground-truth dynamic masks
 // (both written by `flowfusion synth` and `flowfusion augment`).
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/undistortion.h"
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff {
@@ -16,7 +18,10 @@ namespace ff {
 struct SequenceOptions {
   double depth_scale = 5000.0;     // raw depth units per metre (TUM: 5000)
   double max_time_diff = 0.02;     // s, colour-depth association limit (as the benchmark's associate.py)
-  std::string camera;              // "", "fr1|fr2|fr3" or "fx,fy,cx,cy": overrides detection
+  std::string camera;              // "", "fr1|fr2|fr3" or "fx,fy,cx,cy[...]": overrides detection
+  // Undistort frames as they are loaded when the camera has lens distortion (fr1, fr2 or
+  // coefficients in the spec or camera.txt); false feeds the raw images to the pinhole model.
+  bool undistort = true;
 };
 
 struct FrameEntry {
@@ -40,9 +45,13 @@ class TumSequence {
   size_t size() const { return entries_.size(); }
   const FrameEntry& entry(size_t i) const { return entries_.at(i); }
   // Loads frame i and checks it: readable PNGs, 8-bit colour (3 channels; grey is expanded),
-  // 16-bit single-channel depth, both of the camera's size.
+  // 16-bit single-channel depth, both of the camera's size. Undistorted when undistorter() is set.
   RgbdFrame load(size_t i) const;
-  const CameraIntrinsics& camera() const { return camera_; }
+  // The pinhole intrinsics of the frames load() returns.
+  const CameraIntrinsics& camera() const { return camera_.intrinsics; }
+  const LensDistortion& distortion() const { return camera_.distortion; }
+  // Set when frames are undistorted on loading: takes per-frame outputs back to raw pixels.
+  const Undistorter* undistorter() const { return undistorter_.get(); }
   const std::string& dir() const { return dir_; }
   const std::optional<Trajectory>& groundtruth() const { return groundtruth_; }
   // masks/ folder when the sequence carries ground-truth dynamic masks.
@@ -51,13 +60,15 @@ class TumSequence {
  private:
   std::string dir_;
   SequenceOptions options_;
-  CameraIntrinsics camera_;
+  CameraModel camera_;
+  std::shared_ptr<const Undistorter> undistorter_;
   std::vector<FrameEntry> entries_;
   std::optional<Trajectory> groundtruth_;
 };
 
-// camera.txt: one line "fx fy cx cy width height" ('#' comments), or a preset name fr1|fr2|fr3.
-CameraIntrinsics readCameraFile(const std::string& path);
+// camera.txt: one line "fx fy cx cy width height [k1 k2 p1 p2 k3]" ('#' comments), or a preset
+// name fr1|fr2|fr3.
+CameraModel readCameraFile(const std::string& path);
 void writeCameraFile(const std::string& path, const CameraIntrinsics& camera);
 
 // Writes a sequence in the TUM layout (used by synth and augment). Depth in metres is stored as

@@ -53,16 +53,17 @@ double since(std::chrono::steady_clock::time_point t0) {
 }
 
 // Scores of the previous frame carried into the current one: each previous pixel's score is
-// splatted to where the motion takes it (forward warp with its depth), nearest surface wins.
+// splatted to where the motion takes it (forward warp with its depth), nearest surface wins;
+// `fill` where nothing lands.
 cv::Mat carryScores(const cv::Mat& prev_scores, const cv::Mat& prev_depth, const CameraIntrinsics& cam,
-                    const SE3& T_cur_prev) {
-  cv::Mat out(prev_scores.size(), CV_32F, cv::Scalar(0));
+                    const SE3& T_cur_prev, float fill) {
+  cv::Mat out(prev_scores.size(), CV_32F, cv::Scalar(fill));
   cv::Mat zbuf(prev_scores.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
   for (int y = 0; y < prev_depth.rows; ++y)
     for (int x = 0; x < prev_depth.cols; ++x) {
       const float b = prev_scores.at<float>(y, x);
       const float z = prev_depth.at<float>(y, x);
-      if (b <= 0 || z <= 0) continue;
+      if (z <= 0) continue;
       const Eigen::Vector3d q = T_cur_prev * cam.backproject(x, y, z);
       if (q.z() <= 0) continue;
       const Eigen::Vector2d uv = cam.project(q);
@@ -176,7 +177,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     SE3 T_target_cur = T_target_prev * T_prev_cur_guess;
     if (opt.segmentation && opt.carry_scores && !prev_->scores.empty()) {
       const cv::Mat prev_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
-      scores = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur_guess.inverse());
+      scores = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur_guess.inverse(), 0.f);
     }
     t0 = std::chrono::steady_clock::now();
     const cv::Mat initial_weights = scores.empty() ? cv::Mat() : staticWeights(scores);
@@ -213,6 +214,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
           a_M = modelAgreement(seg_frame.depth, background, config_.scores.agreement_margin);
         timings_.add("prediction", since(t0));
       }
+      cv::Mat prior;
+      if (config_.scores.temporal_prior > 0 && !prev_->scores.empty()) {
+        const cv::Mat prev_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
+        const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
+        prior = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur.inverse(),
+                            std::numeric_limits<float>::quiet_NaN());
+      }
       // Flow residuals are in pixels of the input image (ScoreConfig's units).
       const double px_scale = std::ldexp(1.0, seg_level);
       for (int round = 0; round < opt.max_iterations; ++round) {
@@ -226,6 +234,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         res.r_F = flowResidual(flow, egoFlow(seg_frame.depth, seg_camera, T_prev_cur)) * px_scale;
         res.r_M = r_M;
         res.a_M = a_M;
+        res.prior = prior;
         const DynamicScores ds = computeDynamicScores(graph, res, config_.scores);
         scores = pixelScores(graph, ds);
         timings_.add("scores", since(t0));

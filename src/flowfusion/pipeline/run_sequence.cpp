@@ -68,13 +68,18 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
     const RgbdFrame frame = sequence.load(i);
     load_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     const FrameResult r = system.process(frame);
+    // Per-frame images are written in the input images' pixels, however the frames were loaded.
+    const auto inputPixels = [&](const cv::Mat& m) {
+      return sequence.undistorter() ? sequence.undistorter()->toRawPixels(m) : m;
+    };
     if (write && options.write_masks) {
       const std::string p = (out / "masks" / (timestampName(frame.timestamp) + ".png")).string();
-      if (!cv::imwrite(p, r.dynamic_mask)) throw InputError(p + ": cannot write mask");
+      if (!cv::imwrite(p, inputPixels(r.dynamic_mask))) throw InputError(p + ": cannot write mask");
     }
     if (write && options.write_overlays) {
       const std::string p = (out / "overlays" / (timestampName(frame.timestamp) + ".png")).string();
-      if (!cv::imwrite(p, overlayMask(frame.color, r.dynamic_mask))) throw InputError(p + ": cannot write overlay");
+      if (!cv::imwrite(p, inputPixels(overlayMask(frame.color, r.dynamic_mask))))
+        throw InputError(p + ": cannot write overlay");
     }
     ++summary.frames;
     summary.mean_rounds += r.iterations;

@@ -57,7 +57,8 @@ double scoreWeight(double delta, double theta_b, double theta_t) {
 }
 
 Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
-                                 double theta_b, double theta_t, double lambda_G) {
+                                 double theta_b, double theta_t, double lambda_G,
+                                 const std::vector<double>& prior, double lambda_T) {
   checkThresholds(theta_b, theta_t);
   if (!(lambda_G >= 0) || !std::isfinite(lambda_G))
     throw InputError("scores: lambda_G must be a finite value >= 0, got " + std::to_string(lambda_G));
@@ -70,8 +71,9 @@ Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::ve
     const bool known = std::isfinite(delta[i]);
     const double w = known ? scoreWeight(delta[i], theta_b, theta_t) : kNoEvidenceWeight;
     const double g = known ? scoreTarget(delta[i], theta_b, theta_t) : 0.0;
-    triplets.emplace_back(i, i, w);
-    rhs[i] = w * g;
+    const bool has_prior = lambda_T > 0 && i < static_cast<int>(prior.size()) && std::isfinite(prior[i]);
+    triplets.emplace_back(i, i, w + (has_prior ? lambda_T : 0.0));
+    rhs[i] = w * g + (has_prior ? lambda_T * prior[i] : 0.0);
   }
   for (const auto& [i, j] : edges) {
     if (i < 0 || j < 0 || i >= n || j >= n || i == j)
@@ -100,18 +102,21 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.r_F, labels, "r_F");
   checkResidual(residuals.r_M, labels, "r_M");
   checkResidual(residuals.a_M, labels, "a_M");
+  checkResidual(residuals.prior, labels, "prior");
   const int n = graph.num_clusters;
   if (static_cast<int>(graph.mean_depth.size()) != n)
     throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
                      std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
-  constexpr int K = 5;
+  constexpr int K = 6;
   constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
   constexpr int kAgreement = 4;  // index of a_M: scales the motion terms
+  constexpr int kPrior = 5;      // index of the carried scores: the temporal prior
   std::vector<double> sum(K * n, 0.0);
   std::vector<int> cnt(K * n, 0);
-  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M, &residuals.a_M};
+  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M, &residuals.a_M,
+                              &residuals.prior};
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
     for (int k = 0; k < K; ++k) {
@@ -144,9 +149,13 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
       d *= std::max(0.0, 1.0 - config.model_agreement * sum[K * c + kAgreement] / cnt[K * c + kAgreement]);
     delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
   }
+  std::vector<double> prior(n, std::numeric_limits<double>::quiet_NaN());
+  for (int c = 0; c < n; ++c)
+    if (cnt[K * c + kPrior] > 0) prior[c] = sum[K * c + kPrior] / cnt[K * c + kPrior];
   std::vector<double> full(n);
   for (int c = 0; c < n; ++c) full[c] = std::isnan(delta[c]) ? delta[c] : delta[c] + model[c];
-  Eigen::VectorXd b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+  Eigen::VectorXd b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
+                                           config.temporal_prior);
   if (config.model_needs_motion && !residuals.r_M.empty()) {
     // Connected groups of dynamic clusters (union-find over the adjacency graph).
     std::vector<int> parent(n);
@@ -166,7 +175,8 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
         full[c] = delta[c];
         dropped = true;
       }
-    if (dropped) b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G);
+    if (dropped) b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
+                                           config.temporal_prior);
   }
   DynamicScores out;
   out.delta.assign(full.begin(), full.end());

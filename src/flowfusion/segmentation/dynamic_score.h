@@ -63,10 +63,13 @@ struct ScoreConfig {
   // Depth differences below agreement_margin * depth count as agreement for the static evidence:
   // tighter than model_margin, as an object passing close in front of a wall must not agree.
   double agreement_margin = 0.01;
+  // Weight of a temporal prior (our extension; 0 = the paper): lambda_T sum_i (b_i - p_i)^2 with
+  // p_i the cluster's mean of the previous frame's scores carried into this frame.
+  double temporal_prior = 0.0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G, alpha_M,
                                                 model_margin, model_needs_motion, model_agreement,
-                                                agreement_margin)
+                                                agreement_margin, temporal_prior)
 
 // Per-pixel residuals of A, CV_32F, same size as the cluster labels; NaN = invalid (skipped).
 // An empty image leaves its term out of Eq. 10.
@@ -76,6 +79,7 @@ struct ResidualImages {
   cv::Mat r_F;  // flow residual, pixels
   cv::Mat r_M;  // occlusion of the static model, metres (modelOcclusion)
   cv::Mat a_M;  // agreement with the static model, 1 or 0 (modelAgreement)
+  cv::Mat prior;  // previous scores carried into this frame, [0, 1] (ScoreConfig::temporal_prior)
 };
 
 struct DynamicScores {
@@ -101,7 +105,8 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
 // [0, 1]. A NaN delta (no evidence) gets a near-zero data weight towards 0, so its neighbours
 // decide its score. Requires theta_t > theta_b, lambda_G >= 0 and edges within range.
 Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
-                                 double theta_b, double theta_t, double lambda_G);
+                                 double theta_b, double theta_t, double lambda_G,
+                                 const std::vector<double>& prior = {}, double lambda_T = 0.0);
 
 // r_M per pixel: max(0, model_depth - depth - margin * depth), metres, CV_32F; NaN where either
 // depth is missing. Both CV_32FC1 of one size (throws InputError otherwise).
