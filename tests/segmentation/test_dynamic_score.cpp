@@ -90,6 +90,28 @@ TEST(ScoreEnergy, NoEvidenceFollowsNeighboursAndBadInputThrows) {
   EXPECT_EQ(solveScoreEnergy({}, {}, 0.1, 0.3, 1.0).size(), 0);
 }
 
+TEST(ScoreEnergy, TemporalPriorPullsUndecidedClustersOnly) {
+  // No edges: each cluster solves (w + lambda_T) b = w g + lambda_T p on its own.
+  const double tb = 0.1, tt = 0.3, lambda_T = 0.5, nan = std::nan("");
+  const std::vector<double> delta = {0.2, 0.5, 0.2, 0.05};
+  const std::vector<double> prior = {1.0, 0.0, nan, 1.0};
+  const Eigen::VectorXd b = solveScoreEnergy(delta, {}, tb, tt, 1.0, prior, lambda_T);
+  const auto expected = [&](double d, double p) {
+    const double w = scoreWeight(d, tb, tt), g = scoreTarget(d, tb, tt);
+    return (w * g + lambda_T * p) / (w + lambda_T);
+  };
+  EXPECT_NEAR(b[0], expected(0.2, 1.0), 1e-9);  // undecided (g = 0.5): the prior decides it (0.65)
+  EXPECT_GT(b[0], 0.6);
+  EXPECT_NEAR(b[1], expected(0.5, 0.0), 1e-9);  // clear motion keeps a dynamic score (0.82)
+  EXPECT_GT(b[1], 0.8);
+  EXPECT_NEAR(b[2], 0.5, 1e-9);                 // no prior where nothing was carried
+  EXPECT_NEAR(b[3], expected(0.05, 1.0), 1e-9);
+  EXPECT_LT(b[3], 0.5);                         // a static cluster is not kept dynamic by the prior
+  // lambda_T = 0 is the paper's energy.
+  const Eigen::VectorXd paper = solveScoreEnergy(delta, {}, tb, tt, 1.0, prior, 0.0);
+  EXPECT_NEAR(paper[0], 0.5, 1e-9);
+}
+
 TEST(DynamicScores, DeltaIsTheSizeNormalisedWeightedResidual) {
   ClusterGraph g;
   g.labels = cv::Mat(2, 4, CV_32S);

@@ -37,6 +37,7 @@ void validate(const SystemConfig& c) {
   if (!(c.scores.model_agreement >= 0 && c.scores.model_agreement <= 1))
     throw InputError("scores.model_agreement must be in [0, 1] (0 turns the map's static evidence off)");
   if (!(c.scores.agreement_margin > 0)) throw InputError("scores.agreement_margin must be > 0");
+  if (!(c.scores.temporal_prior >= 0)) throw InputError("scores.temporal_prior must be >= 0 (0 turns the prior off)");
 }
 
 struct FlowFusionSystem::Previous {
