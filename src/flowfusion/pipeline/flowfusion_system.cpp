@@ -176,10 +176,9 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     // T_target_cur: current-camera points into the target camera.
     const SE3 T_prev_cur_guess = opt.constant_velocity ? T_prev_cur_velocity_ : SE3::Identity();
     SE3 T_target_cur = T_target_prev * T_prev_cur_guess;
-    if (opt.segmentation && opt.carry_scores && !prev_->scores.empty()) {
-      const cv::Mat prev_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
-      scores = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur_guess.inverse(), 0.f);
-    }
+    const cv::Mat& prev_seg_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
+    if (opt.segmentation && opt.carry_scores && !prev_->scores.empty())
+      scores = carryScores(prev_->scores, prev_seg_depth, seg_camera, T_prev_cur_guess.inverse(), 0.f);
     t0 = std::chrono::steady_clock::now();
     const cv::Mat initial_weights = scores.empty() ? cv::Mat() : staticWeights(scores);
     OdometryResult odo = odometry_.estimate(cur, *target, T_target_cur, initial_weights);
@@ -217,9 +216,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       }
       cv::Mat prior;
       if (config_.scores.temporal_prior > 0 && !prev_->scores.empty()) {
-        const cv::Mat prev_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
         const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
-        prior = carryScores(prev_->scores, prev_depth, seg_camera, T_prev_cur.inverse(),
+        prior = carryScores(prev_->scores, prev_seg_depth, seg_camera, T_prev_cur.inverse(),
                             std::numeric_limits<float>::quiet_NaN());
       }
       // Flow residuals are in pixels of the input image (ScoreConfig's units).

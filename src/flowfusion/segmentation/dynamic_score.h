@@ -102,13 +102,16 @@ double scoreWeight(double delta, double theta_b, double theta_t);
 // delta_i = [alpha_I mean(r_I) + mean(r_D) / D_i + alpha_F mean(r_F)] (1 - model_agreement mean(a_M))
 //           (+ alpha_M mean(r_M) / D_i) over cluster i's pixels
 // (Eq. 10 normalised by size; each mean over the pixels where that residual is valid, so one
-// missing term does not drop the others), then b from solveScoreEnergy. Throws InputError on
+// missing term does not drop the others), then b from solveScoreEnergy, with p_i the cluster's mean
+// of residuals.prior where it is given (ScoreConfig::temporal_prior). Throws InputError on
 // mismatched sizes/types or invalid thresholds.
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
                                    const ScoreConfig& config);
 
-// Minimises E(b) = sum_i w_i (b_i - g_i)^2 + lambda_G sum_{(i,j)} (b_i - b_j)^2 (Eqs. 11-15):
-// (W + lambda_G L) b = W g, L the graph Laplacian, solved with a sparse LDLT, then clamped to
+// Minimises E(b) = sum_i w_i (b_i - g_i)^2 + lambda_G sum_{(i,j)} (b_i - b_j)^2 (Eqs. 11-15)
+// + lambda_T sum_i (b_i - p_i)^2 over the clusters with a finite prior p_i (none when `prior` is
+// empty or lambda_T = 0): (W + lambda_T P + lambda_G L) b = W g + lambda_T P p, L the graph
+// Laplacian, P selecting the clusters with a prior, solved with a sparse LDLT, then clamped to
 // [0, 1]. A NaN delta (no evidence) gets a near-zero data weight towards 0, so its neighbours
 // decide its score. Requires theta_t > theta_b, lambda_G >= 0 and edges within range.
 Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
