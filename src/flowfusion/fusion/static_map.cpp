@@ -136,7 +136,8 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
   const int stride = config_.integration_stride;
   const int gw = (camera.width + stride - 1) / stride;
   const int gh = (camera.height + stride - 1) / stride;
-  const float min_depth = static_cast<float>(config_.min_depth_m);
+  const CameraView view(T_world_cam, camera, config_.min_depth_m);
+  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
   const float max_depth = static_cast<float>(config_.max_depth_m);
   const float discontinuity = static_cast<float>(config_.depth_discontinuity_ratio);
   const float min_weight = static_cast<float>(config_.min_static_weight);
@@ -213,11 +214,6 @@ void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera
 
   // 2. Index map: the nearest surfel per fused pixel; free-space votes for surfels in front of
   // the measured surface.
-  const SE3 T_cam_world = T_world_cam.inverse();
-  const Eigen::Matrix3f R_cam_world = T_cam_world.linear().cast<float>();
-  const Eigen::Vector3f t_cam_world = T_cam_world.translation().cast<float>();
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float inv_stride = 1.0f / stride;
   const float margin = static_cast<float>(config_.free_space_margin_m);
   const std::vector<uint64_t> index_map = nearestSurfels(surfels_.size(), meas.size(), [&](size_t k, auto&& write) {

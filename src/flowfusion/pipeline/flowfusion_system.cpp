@@ -45,6 +45,9 @@ struct FlowFusionSystem::Previous {
   OdometryFrame odo;
   SE3 T_world_cam;
   cv::Mat scores;  // b per pixel at the segmentation level, empty when none
+
+  // Depth image at pyramid `level` (level 0 is the input frame's own).
+  const cv::Mat& depthAt(int level) const { return level == 0 ? frame.depth : odo.level(level).depth; }
 };
 
 namespace {
@@ -157,8 +160,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       const int finest = config_.odometry.finest_level;
       const ModelPrediction pred = map_->predict(prev_->T_world_cam, camera_.atLevel(finest));
       const double covered = cv::countNonZero(pred.depth > 0);
-      const cv::Mat& prev_depth = finest == 0 ? prev_->frame.depth : prev_->odo.level(finest).depth;
-      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_depth > 0);
+      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_->depthAt(finest) > 0);
       if (covered >= needed) {
         // The model's depth is averaged over many frames (less noise, less drift); its colour is
         // blurred by the surfel splats, so the previous image stays the photometric target.
@@ -176,7 +178,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     // T_target_cur: current-camera points into the target camera.
     const SE3 T_prev_cur_guess = opt.constant_velocity ? T_prev_cur_velocity_ : SE3::Identity();
     SE3 T_target_cur = T_target_prev * T_prev_cur_guess;
-    const cv::Mat& prev_seg_depth = seg_level == 0 ? prev_->frame.depth : prev_->odo.level(seg_level).depth;
+    const cv::Mat& prev_seg_depth = prev_->depthAt(seg_level);
     if (opt.segmentation && opt.carry_scores && !prev_->scores.empty())
       scores = carryScores(prev_->scores, prev_seg_depth, seg_camera, T_prev_cur_guess.inverse(), 0.f);
     t0 = std::chrono::steady_clock::now();
