@@ -36,7 +36,7 @@ struct Row {
   double iou = NAN, precision = NAN, recall = NAN, peak_mib = NAN;
 };
 
-const std::vector<std::string> kStages = {"odometry", "flow", "clustering", "scores", "prediction", "fusion"};
+const std::vector<std::string> kStages = {"odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion"};
 
 void addTrajectoryErrors(Row& row, const TumSequence& seq, const Trajectory& est) {
   if (!seq.groundtruth()) return;

@@ -35,7 +35,8 @@ void execute(const RunCommand& c) {
     };
   const RunSummary s = runSequence(seq, config, o);
   if (c.quiet) return;
-  std::printf("frames %zu, tracking failures %d, median ms per frame:", s.frames, s.tracking_failures);
+  std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
+              s.tracking_failures, s.flow_restarts);
   double total = 0;
   for (const auto& stage : s.timings.stages()) {
     std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));

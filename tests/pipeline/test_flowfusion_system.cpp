@@ -41,6 +41,7 @@ struct RunResult {
   double mean_iou = 0;           // over frames where a moving object covers >= 1 % of the image
   int iou_frames = 0;
   int model_frames = 0;          // frames aligned to the map's prediction
+  int flow_restarts = 0;
 };
 
 double iou(const cv::Mat& gt, const cv::Mat& est) {
@@ -49,10 +50,7 @@ double iou(const cv::Mat& gt, const cv::Mat& est) {
   return uni == 0 ? 1.0 : static_cast<double>(inter) / uni;
 }
 
-RunResult runOn(const synth::SyntheticScene& scene, bool segmentation, const std::string& tracking = {}) {
-  SystemConfig config;
-  config.pipeline.segmentation = segmentation;
-  if (!tracking.empty()) config.pipeline.tracking = tracking;
+RunResult runOn(const synth::SyntheticScene& scene, const SystemConfig& config) {
   FlowFusionSystem system(config, scene.camera(), scene.cameraPose(0));
   Trajectory gt;
   RunResult out;
@@ -72,9 +70,17 @@ RunResult runOn(const synth::SyntheticScene& scene, bool segmentation, const std
     }
   }
   out.ate_rmse_m = eval::computeAte(gt, system.trajectory()).translation_m.rmse;
+  out.flow_restarts = system.flowRestarts();
   out.dynamic_fraction = dynamic_pixels / pixels;
   out.mean_iou = out.iou_frames > 0 ? iou_sum / out.iou_frames : 0;
   return out;
+}
+
+RunResult runOn(const synth::SyntheticScene& scene, bool segmentation, const std::string& tracking = {}) {
+  SystemConfig config;
+  config.pipeline.segmentation = segmentation;
+  if (!tracking.empty()) config.pipeline.tracking = tracking;
+  return runOn(scene, config);
 }
 
 // Each scene is rendered and run once for all tests below.
@@ -130,6 +136,27 @@ TEST(FlowFusionSystem, MovingObjectsDoNotSpoilTheTrajectory) {
   // static) is not met on this small scene, whose objects are in view from the first frame.
   EXPECT_LT(dyn.ate_rmse_m, 0.01);
   EXPECT_LT(stat.ate_rmse_m, dyn.ate_rmse_m);
+}
+
+TEST(FlowFusionSystem, ALargeObjectMovingFromTheFirstFrameDoesNotCaptureTheOdometry) {
+  // Seed 3 at full size: a near box covering a quarter of the view slides across from frame 0,
+  // before any score exists; the plain robust odometry follows it and the carried scores then
+  // call the background dynamic (the full 150 frames: 117 mm ATE without the flow consensus).
+  synth::SynthConfig c = smallScene(2, 3);
+  c.frames = 12;
+  c.width = 640;
+  c.height = 480;
+  const synth::SyntheticScene scene(c);
+  SystemConfig with;
+  SystemConfig without;
+  without.consensus.enabled = false;
+  const RunResult on = runOn(scene, with), off = runOn(scene, without);
+  std::cout << "ATE mm: flow consensus " << 1e3 * on.ate_rmse_m << " (" << on.flow_restarts << " restarts), without "
+            << 1e3 * off.ate_rmse_m << "\n";
+  // Measured: 8.3 mm with 2 restarts, 62 mm without.
+  EXPECT_GE(on.flow_restarts, 1);
+  EXPECT_LT(on.ate_rmse_m, 0.02);
+  EXPECT_GT(off.ate_rmse_m, 2 * on.ate_rmse_m);
 }
 
 TEST(RunSequence, WritesResultsAndRefusesANonEmptyFolder) {

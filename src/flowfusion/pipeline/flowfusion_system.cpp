@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
 #include "flowfusion/core/error.h"
@@ -28,6 +29,7 @@ void validate(const SystemConfig& c) {
   if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
     throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");
   validate(c.odometry);
+  validate(c.consensus);
   validateFusionConfig(c.fusion);
   makeOpticalFlow(c.flow);
   makeClusterer(c.clustering);
@@ -96,6 +98,20 @@ cv::Mat staticWeights(const cv::Mat& scores) {
 bool converged(const SE3& a, const SE3& b, const PipelineOptions& p) {
   const SE3 d = a.inverse() * b;
   return translationNorm(d) < p.converged_translation && rotationAngleDeg(d) < p.converged_rotation_deg;
+}
+
+// The flow's rigid motion T_prev_cur when it explains at least min_gain of the sampled flow more
+// than `T_prev_cur_odometry` does.
+std::optional<SE3> flowConsensusMotion(const FlowField& flow, const cv::Mat& depth, const CameraIntrinsics& camera,
+                                       const SE3& T_prev_cur_odometry, const ConsensusConfig& cfg) {
+  const FlowCorrespondences c = sampleFlowCorrespondences(flow, depth, camera, cfg.grid_step);
+  const double n = static_cast<double>(c.size());
+  const int explained = countFlowInliers(c, camera, T_prev_cur_odometry, cfg.inlier_px);
+  // RANSAC cannot win by min_gain when the odometry already explains this much.
+  if (explained >= (1.0 - cfg.min_gain) * n) return std::nullopt;
+  const FlowMotion m = estimateFlowMotion(c, camera, cfg);
+  if (!m.ok || m.inliers < explained + cfg.min_gain * n) return std::nullopt;
+  return m.T_b_a;
 }
 
 OdometryConfig refineConfig(const SystemConfig& c) {
@@ -194,10 +210,39 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     timings_.add("odometry", since(t0));
     if (odo.ok) T_target_cur = odo.T_cur_ref;
 
-    if (opt.segmentation && odo.ok) {
+    FlowField flow;
+    if (opt.segmentation) {
       t0 = std::chrono::steady_clock::now();
-      const FlowField flow = flow_->compute(frame.intensity, prev_->frame.intensity);
+      flow = flow_->compute(frame.intensity, prev_->frame.intensity);
       timings_.add("flow", since(t0));
+    }
+    const double px_scale = std::ldexp(1.0, seg_level);  // seg-level pixels to input pixels
+    if (opt.segmentation && config_.consensus.enabled) {
+      t0 = std::chrono::steady_clock::now();
+      const auto T_prev_cur_flow = flowConsensusMotion(flow, frame.depth, camera_,
+                                                       T_target_prev.inverse() * T_target_cur, config_.consensus);
+      timings_.add("consensus", since(t0));
+      if (T_prev_cur_flow) {
+        // The carried scores belong to the motion just rejected: the flow's own split replaces them.
+        const cv::Mat r_F =
+            flowResidual(flow, egoFlow(cur.level(seg_level).depth, seg_camera, *T_prev_cur_flow)) * px_scale;
+        cv::Mat flow_scores;
+        cv::Mat(r_F > config_.consensus.inlier_px).convertTo(flow_scores, CV_32F, 1.0 / 255);
+        t0 = std::chrono::steady_clock::now();
+        const OdometryResult again =
+            odometry_.estimate(cur, *target, T_target_prev * *T_prev_cur_flow, staticWeights(flow_scores));
+        timings_.add("odometry", since(t0));
+        if (again.ok) {
+          odo = again;
+          T_target_cur = again.T_cur_ref;
+          scores = flow_scores;
+          result.restarted_from_flow = true;
+          ++flow_restarts_;
+        }
+      }
+    }
+
+    if (opt.segmentation && odo.ok) {
       t0 = std::chrono::steady_clock::now();
       RgbdFrame seg_frame;
       seg_frame.timestamp = frame.timestamp;
@@ -217,13 +262,12 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         timings_.add("prediction", since(t0));
       }
       cv::Mat prior;
-      if (config_.scores.temporal_prior > 0 && !prev_->scores.empty()) {
+      if (config_.scores.temporal_prior > 0 && !prev_->scores.empty() && !result.restarted_from_flow) {
         const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
         prior = carryScores(prev_->scores, prev_seg_depth, seg_camera, T_prev_cur.inverse(),
                             std::numeric_limits<float>::quiet_NaN());
       }
       // Flow residuals are in pixels of the input image (ScoreConfig's units).
-      const double px_scale = std::ldexp(1.0, seg_level);
       for (int round = 0; round < opt.max_iterations; ++round) {
         t0 = std::chrono::steady_clock::now();
         const PixelResiduals pr = computePixelResiduals(cur, *target, T_target_cur, seg_level, config_.odometry);

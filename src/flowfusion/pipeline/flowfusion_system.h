@@ -8,8 +8,9 @@
 // its own pixels, and the map prediction (static only by construction) is the target, never the
 // weighted side. Optical flow therefore runs from the current to the previous image.
 //
-// Per frame:  odometry (Eq. 1, weighted by the previous frame's scores carried over when
-// available) -> [flow residual (Eq. 8-9), clusters, scores (Eq. 10-15, with the static map's
+// Per frame:  optical flow -> odometry (Eq. 1, weighted by the previous frame's scores carried
+// over when available; restarted from the flow's rigid consensus when that explains clearly more
+// of the flow, flow/flow_motion.h) -> [flow residual (Eq. 8-9), clusters, scores (Eq. 10-15, with the static map's
 // occlusion and agreement terms of ScoreConfig), weighted odometry (Eq. 16)] repeated until the
 // motion settles -> static map fusion with weights 1 - b. The frame then becomes the next
 // frame's target (previous frame or keyframe) with its static weights 1 - b as target weights.
@@ -21,6 +22,7 @@
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/flow/flow_motion.h"
 #include "flowfusion/flow/optical_flow.h"
 #include "flowfusion/fusion/static_map.h"
 #include "flowfusion/io/trajectory_io.h"
@@ -81,11 +83,13 @@ struct SystemConfig {
   PipelineOptions pipeline;
   OdometryConfig odometry;
   FlowConfig flow;
+  ConsensusConfig consensus;
   ClusteringConfig clustering;
   ScoreConfig scores;
   FusionConfig fusion;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry, flow, clustering, scores, fusion)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry, flow, consensus, clustering, scores,
+                                                fusion)
 // Throws InputError naming the first bad setting.
 void validate(const SystemConfig& config);
 
@@ -95,6 +99,7 @@ struct FrameResult {
   bool tracking_ok = true;
   std::string message;          // what the tracker did when it did not simply succeed
   bool used_model = false;      // aligned to the map prediction
+  bool restarted_from_flow = false;  // the odometry was restarted from the flow's rigid consensus
   int iterations = 0;           // segmentation rounds
   cv::Mat dynamic_mask;         // CV_8U, input size, 255 = dynamic, in this frame's pixels
   cv::Mat scores;               // CV_32F b per pixel at the segmentation level (empty when off)
@@ -107,7 +112,7 @@ class FlowFusionSystem {
   ~FlowFusionSystem();
 
   // Processes the next frame (in time order) and returns its pose and mask. Stage times are added
-  // to timings() under "odometry", "flow", "clustering", "scores", "prediction", "fusion".
+  // to timings() under "odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion".
   FrameResult process(const RgbdFrame& frame);
 
   const Trajectory& trajectory() const { return trajectory_; }
@@ -115,6 +120,7 @@ class FlowFusionSystem {
   eval::Timings& timings() { return timings_; }
   const SystemConfig& config() const { return config_; }
   int trackingFailures() const { return failures_; }
+  int flowRestarts() const { return flow_restarts_; }
 
  private:
   struct Previous;
@@ -133,6 +139,7 @@ class FlowFusionSystem {
   Trajectory trajectory_;
   eval::Timings timings_;
   int failures_ = 0;
+  int flow_restarts_ = 0;
 };
 
 }  // namespace ff

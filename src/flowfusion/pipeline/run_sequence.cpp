@@ -88,6 +88,7 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
   if (summary.frames > 0) summary.mean_rounds /= static_cast<double>(summary.frames);
   summary.trajectory = system.trajectory();
   summary.tracking_failures = system.trackingFailures();
+  summary.flow_restarts = system.flowRestarts();
   summary.load_ms_median = eval::median(load_ms);
   summary.timings = system.timings();
   if (const StaticMap* map = system.map()) {
@@ -116,6 +117,7 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
     j["sequence"] = sequence.dir();
     j["frames"] = summary.frames;
     j["tracking_failures"] = summary.tracking_failures;
+    j["flow_restarts"] = summary.flow_restarts;
     j["mean_rounds"] = summary.mean_rounds;
     j["map_surfels"] = summary.map_surfels;
     j["map_budget_reached"] = summary.map_budget_reached;

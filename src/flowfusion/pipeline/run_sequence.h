@@ -31,6 +31,7 @@ struct RunSummary {
   Trajectory trajectory;
   size_t frames = 0;
   int tracking_failures = 0;
+  int flow_restarts = 0;  // frames whose odometry restarted from the flow's rigid consensus
   double mean_rounds = 0;      // segmentation <-> odometry rounds per frame (FrameResult::iterations)
   double load_ms_median = 0;   // image reading and conversion, not part of the pipeline
   eval::Timings timings;
