@@ -209,6 +209,7 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
   rejects([](SystemConfig& c) { c.pipeline.refine_coarsest_level = 9; }, "pipeline.refine_coarsest_level");
   rejects([](SystemConfig& c) { c.pipeline.refine_iterations = 0; }, "pipeline.refine_iterations");
   rejects([](SystemConfig& c) { c.pipeline.fusion_every = 0; }, "pipeline.fusion_every");
+  rejects([](SystemConfig& c) { c.consensus.ransac_iterations = 0; }, "consensus.ransac_iterations");
   EXPECT_NO_THROW(validate(SystemConfig{}));
 }
 

@@ -25,7 +25,8 @@ struct ConsensusConfig {
   // odometry explains 90-100 % of the flow within 1.5 px; on the shared fr1/xyz frames it explains
   // 28 % within 1.5 px, 63 % within 3 px and 87 % within 5 px (mean over frames), because the
   // colour and depth images are taken up to 20 ms apart (the odometry's motion is the depth
-  // images', the flow's the colour images') and real flow is less exact.
+  // images', the flow's the colour images'; in about one pair of frames in four the two
+  // intervals differ by a whole frame) and real flow is less exact.
   double inlier_px = 3.0;
   int ransac_iterations = 100;  // minimal-sample (P3P) hypotheses
   // The flow's motion replaces the odometry's when it explains at least this fraction of the
@@ -36,7 +37,7 @@ struct ConsensusConfig {
   //   3 / 0.3                3.0 / 2            14.8 / 120      16.9 / 95
   //   3 / 0.45               5.6 / 1            14.8 / 89       16.8 / 59
   //   5 / 0.3                9.2 / 1            14.8 / 33       15.7 / 29
-  // Synth seeds 1, 2, 4, 5, 6 restart in no frame with any of these. A restart that does not help
+  // Synth seeds 1, 2, 4, 5, 6 restart in no frame with 3 / 0.3 or 5 / 0.3. A restart that does not help
   // converges back to about the same pose (fr1 +0.1 mm) and costs one more odometry (~7 ms).
   double min_gain = 0.3;
 };
