@@ -1,6 +1,7 @@
 #include "flowfusion/core/undistortion.h"
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -8,16 +9,14 @@ namespace ff {
 
 namespace {
 
-cv::Mat cvK(const CameraIntrinsics& c) {
-  return (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
-}
-
 cv::Mat cvDistortion(const LensDistortion& d) { return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3); }
 
 }  // namespace
 
 Undistorter::Undistorter(const CameraIntrinsics& camera, const LensDistortion& distortion) {
-  const cv::Mat K = cvK(camera), D = cvDistortion(distortion);
+  cv::Mat K;
+  cv::eigen2cv(camera.K(), K);
+  const cv::Mat D = cvDistortion(distortion);
   const cv::Size size(camera.width, camera.height);
   cv::initUndistortRectifyMap(K, D, cv::Mat(), K, size, CV_32FC1, undistort_x_, undistort_y_);
   // The inverse map: where each raw pixel lands once undistorted (iterative inversion by OpenCV).

@@ -19,8 +19,9 @@
 //   reproduces the depth to < 0.01 mm median (tests/fusion).
 // - Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
 //   measured depth (the camera sees through it) gets a free-space vote, and one at the depth of a
-//   pixel weighted as dynamic a dynamic vote; a surfel with more votes than support is removed. Surfels that never become stable (confidence below
-//   stable_confidence within unstable_window_frames) are removed too. A background that was
+//   pixel weighted as dynamic a dynamic vote; a surfel with more votes than support is removed.
+//   Surfels that never become stable (confidence below stable_confidence within
+//   unstable_window_frames) are removed too. A background that was
 //   occluded gets new surfels as soon as it is seen with weight.
 // A triangle mesh is made at export time by integrating the model's own predictions at the stored
 // keyframe poses into an Open3D ScalableTSDFVolume (CPU), so the mesh holds only static surfels.

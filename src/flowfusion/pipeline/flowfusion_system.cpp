@@ -216,7 +216,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       flow = flow_->compute(frame.intensity, prev_->frame.intensity);
       timings_.add("flow", since(t0));
     }
-    const double px_scale = std::ldexp(1.0, seg_level);  // seg-level pixels to input pixels
+    // r_F (Eq. 9) at the segmentation level under the motion T_prev_cur, in pixels of the input
+    // image (ScoreConfig's units). The flow runs from the current to the previous image, whatever
+    // the target.
+    const double px_scale = std::ldexp(1.0, seg_level);
+    const auto flowResidualAt = [&](const SE3& T_prev_cur) -> cv::Mat {
+      return flowResidual(flow, egoFlow(cur.level(seg_level).depth, seg_camera, T_prev_cur)) * px_scale;
+    };
     if (opt.segmentation && config_.consensus.enabled) {
       t0 = std::chrono::steady_clock::now();
       const auto T_prev_cur_flow = flowConsensusMotion(flow, frame.depth, camera_,
@@ -224,10 +230,9 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       timings_.add("consensus", since(t0));
       if (T_prev_cur_flow) {
         // The carried scores belong to the motion just rejected: the flow's own split replaces them.
-        const cv::Mat r_F =
-            flowResidual(flow, egoFlow(cur.level(seg_level).depth, seg_camera, *T_prev_cur_flow)) * px_scale;
+        const cv::Mat outliers = flowResidualAt(*T_prev_cur_flow) > config_.consensus.inlier_px;
         cv::Mat flow_scores;
-        cv::Mat(r_F > config_.consensus.inlier_px).convertTo(flow_scores, CV_32F, 1.0 / 255);
+        outliers.convertTo(flow_scores, CV_32F, 1.0 / 255);
         t0 = std::chrono::steady_clock::now();
         const OdometryResult again =
             odometry_.estimate(cur, *target, T_target_prev * *T_prev_cur_flow, staticWeights(flow_scores));
@@ -267,16 +272,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         prior = carryScores(prev_->scores, prev_seg_depth, seg_camera, T_prev_cur.inverse(),
                             std::numeric_limits<float>::quiet_NaN());
       }
-      // Flow residuals are in pixels of the input image (ScoreConfig's units).
       for (int round = 0; round < opt.max_iterations; ++round) {
         t0 = std::chrono::steady_clock::now();
         const PixelResiduals pr = computePixelResiduals(cur, *target, T_target_cur, seg_level, config_.odometry);
         ResidualImages res;
         res.r_I = pr.abs_intensity;
         res.r_D = pr.abs_depth;
-        // The flow runs from the current to the previous image, whatever the target.
-        const SE3 T_prev_cur = T_target_prev.inverse() * T_target_cur;
-        res.r_F = flowResidual(flow, egoFlow(seg_frame.depth, seg_camera, T_prev_cur)) * px_scale;
+        res.r_F = flowResidualAt(T_target_prev.inverse() * T_target_cur);
         res.r_M = r_M;
         res.a_M = a_M;
         res.prior = prior;

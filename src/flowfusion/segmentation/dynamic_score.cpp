@@ -154,8 +154,11 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
     if (cnt[K * c + kPrior] > 0) prior[c] = sum[K * c + kPrior] / cnt[K * c + kPrior];
   std::vector<double> full(n);
   for (int c = 0; c < n; ++c) full[c] = std::isnan(delta[c]) ? delta[c] : delta[c] + model[c];
-  Eigen::VectorXd b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
-                                           config.temporal_prior);
+  const auto solve = [&] {
+    return solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
+                            config.temporal_prior);
+  };
+  Eigen::VectorXd b = solve();
   if (config.model_needs_motion && !residuals.r_M.empty()) {
     // Connected groups of dynamic clusters (union-find over the adjacency graph).
     std::vector<int> parent(n);
@@ -175,8 +178,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
         full[c] = delta[c];
         dropped = true;
       }
-    if (dropped) b = solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
-                                           config.temporal_prior);
+    if (dropped) b = solve();
   }
   DynamicScores out;
   out.delta.assign(full.begin(), full.end());
