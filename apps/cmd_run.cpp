@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <numeric>
 
 #include "command.h"
 #include "flowfusion/eval/trajectory_metrics.h"
@@ -37,12 +38,9 @@ void execute(const RunCommand& c) {
   if (c.quiet) return;
   std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
               s.tracking_failures, s.flow_restarts);
-  double total = 0;
-  for (const auto& stage : s.timings.stages()) {
-    std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
-    total += s.timings.meanMs(stage);
-  }
-  std::printf(" (mean total %.1f ms)\n", total);
+  for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
+  const std::vector<double> totals = s.timings.frameTotals();
+  std::printf(" (mean total %.1f ms)\n", totals.empty() ? 0.0 : std::accumulate(totals.begin(), totals.end(), 0.0) / totals.size());
   if (seq.groundtruth()) {
     const auto ate = eval::computeAte(*seq.groundtruth(), s.trajectory);
     std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,

@@ -29,7 +29,9 @@ struct SystemOptions {
     config.addTo(cmd, "SystemConfig");
     cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
     cmd->add_flag("--no-segmentation", no_segmentation, "Plain robust odometry, no dynamic segmentation");
-    cmd->add_option("--tracking", tracking, "frame_to_keyframe (default), frame_to_frame or frame_to_model");
+    cmd->add_option("--tracking", tracking,
+                    "frame_to_keyframe (default; keyframes from the map, see pipeline.model_keyframes), "
+                    "frame_to_frame or frame_to_model");
   }
 
   SequenceOptions sequenceOptions() const {

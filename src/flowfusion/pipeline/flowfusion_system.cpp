@@ -47,6 +47,7 @@ struct FlowFusionSystem::Previous {
   OdometryFrame odo;
   SE3 T_world_cam;
   cv::Mat scores;  // b per pixel at the segmentation level, empty when none
+  bool from_model = false;  // odo holds the map's depth predicted at T_world_cam
 
   // Depth image at pyramid `level` (level 0 is the input frame's own).
   const cv::Mat& depthAt(int level) const { return level == 0 ? frame.depth : odo.level(level).depth; }
@@ -137,6 +138,25 @@ FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntri
 
 FlowFusionSystem::~FlowFusionSystem() = default;
 
+std::optional<OdometryFrame> FlowFusionSystem::modelTarget(const RgbdFrame& frame, const cv::Mat& depth_at_finest,
+                                                           const SE3& T_world_cam, const cv::Mat& keep) const {
+  // Rendered at the odometry's finest level (the finer input levels are never aligned) and
+  // brought to the input size, where the pyramid's 2x2 averages give it back unchanged.
+  const int finest = config_.odometry.finest_level;
+  const ModelPrediction pred = map_->predict(T_world_cam, camera_.atLevel(finest));
+  const double covered = cv::countNonZero(pred.depth > 0);
+  const double needed = config_.pipeline.model_min_valid_fraction * cv::countNonZero(depth_at_finest > 0);
+  if (covered < needed) return std::nullopt;
+  // The model's depth is averaged over many frames (less noise, less drift); its colour is
+  // blurred by the surfel splats, so the frame's own image stays the photometric target.
+  // Where the model has no surface, and at the `keep` pixels, the frame's depth stays.
+  cv::Mat depth;
+  cv::resize(pred.depth, depth, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
+  frame.depth.copyTo(depth, depth <= 0);
+  if (!keep.empty()) frame.depth.copyTo(depth, keep);
+  return prepareOdometryFrame(frame.intensity, depth, camera_, config_.odometry);
+}
+
 FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   const PipelineOptions& opt = config_.pipeline;
   if (frame.width() != camera_.width || frame.height() != camera_.height)
@@ -167,24 +187,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     if (opt.tracking == "frame_to_keyframe" && keyframe_) {
       target = &keyframe_->odo;
       T_world_target = keyframe_->T_world_cam;
+      result.used_model = keyframe_->from_model;
     }
     const SE3 T_target_prev = T_world_target.inverse() * prev_->T_world_cam;
     if (opt.tracking == "frame_to_model" && map_ && map_->size() > 0) {
       t0 = std::chrono::steady_clock::now();
-      // Rendered at the odometry's finest level (the finer input levels are never aligned) and
-      // brought to the input size, where the pyramid's 2x2 averages give it back unchanged.
-      const int finest = config_.odometry.finest_level;
-      const ModelPrediction pred = map_->predict(prev_->T_world_cam, camera_.atLevel(finest));
-      const double covered = cv::countNonZero(pred.depth > 0);
-      const double needed = opt.model_min_valid_fraction * cv::countNonZero(prev_->depthAt(finest) > 0);
-      if (covered >= needed) {
-        // The model's depth is averaged over many frames (less noise, less drift); its colour is
-        // blurred by the surfel splats, so the previous image stays the photometric target.
-        // Where the model has no surface the previous frame's depth fills in.
-        cv::Mat depth;
-        cv::resize(pred.depth, depth, prev_->frame.depth.size(), 0, 0, cv::INTER_NEAREST);
-        prev_->frame.depth.copyTo(depth, depth <= 0);
-        model = prepareOdometryFrame(prev_->frame.intensity, depth, camera_, config_.odometry);
+      if (auto predicted = modelTarget(prev_->frame, prev_->depthAt(config_.odometry.finest_level), prev_->T_world_cam)) {
+        model = std::move(*predicted);
         target = &model;
         result.used_model = true;
       }
@@ -330,6 +339,19 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       keyframe_->frame = frame;
       keyframe_->odo = cur;
       keyframe_->T_world_cam = result.T_world_cam;
+      keyframe_->from_model = false;
+      if (opt.model_keyframes && map_ && map_->size() > 0) {
+        t0 = std::chrono::steady_clock::now();
+        // The map has no moving objects; the keyframe's image has, so their pixels keep its depth.
+        const int finest = config_.odometry.finest_level;
+        if (auto predicted = modelTarget(frame, finest == 0 ? frame.depth : cur.level(finest).depth, result.T_world_cam,
+                                         result.dynamic_mask)) {
+          keyframe_->odo = std::move(*predicted);
+          if (!scores.empty()) setTargetWeights(keyframe_->odo, staticWeights(scores));
+          keyframe_->from_model = true;
+        }
+        timings_.add("prediction", since(t0));
+      }
     }
   }
   if (!prev_) prev_ = std::make_unique<Previous>();
