@@ -77,6 +77,20 @@ void BM_SurfelPredict(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfelPredict)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// predict()'s averaged depth alone from square splats (the model keyframes); argument: level as above.
+void BM_SurfelPredictDepth(benchmark::State& state) {
+  const Sequence& seq = sequence();
+  const ff::StaticMap map = warmMap(seq);
+  const ff::CameraIntrinsics camera = seq.camera.atLevel(static_cast<int>(state.range(0)));
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(map.predictDepth(seq.frames[i % seq.frames.size()].T_world_cam, camera));
+    ++i;
+  }
+  state.counters["surfels"] = static_cast<double>(map.size());
+}
+BENCHMARK(BM_SurfelPredictDepth)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // The segmentation's view of the map (stable surfels, square splats); argument: level as above.
 void BM_SurfelPredictStableDepth(benchmark::State& state) {
   const Sequence& seq = sequence();

@@ -106,6 +106,40 @@ TEST(StaticMap, PredictionReproducesDepthAtFusedPoseAndCoarserLevel) {
   }
 }
 
+TEST(StaticMap, DepthOnlyPredictionMatchesTheTruthAndTheRayTracedOne) {
+  RoomFixture room;
+  room.frames = 12;
+  const StaticMap map = fuse(room, false);
+  const CameraIntrinsics cam = room.camera.atLevel(1);
+  const SE3 pose = room.pose(room.frames - 1);
+  const auto truth = room.render(pose, cam, -1);
+  const cv::Mat fast = map.predictDepth(pose, cam);
+  const ModelPrediction full = map.predict(pose, cam);
+  ASSERT_EQ(fast.type(), CV_32FC1);
+  ASSERT_EQ(fast.size(), full.depth.size());
+  std::vector<double> err, diff;
+  int drawn = 0, traced = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const float zf = fast.at<float>(y, x), zr = full.depth.at<float>(y, x);
+      traced += zr > 0;
+      if (zf <= 0) continue;
+      ++drawn;
+      err.push_back(std::abs(zf - truth.frame.depth.at<float>(y, x)));
+      if (zr > 0) diff.push_back(std::abs(zf - zr));
+    }
+  const double coverage = static_cast<double>(drawn) / traced;
+  std::printf("depth-only prediction: coverage %.3f of the ray-traced one, median |depth - truth| %.2f mm, "
+              "median |depth - ray-traced| %.2f mm\n",
+              coverage, median(err) * 1e3, median(diff) * 1e3);
+  // Measured: coverage 0.93, 0.00 mm and 0.00 mm: the small squares leave some pixels between
+  // surfels empty (the pipeline fills them with the frame's own depth).
+  EXPECT_GT(coverage, 0.9);
+  EXPECT_LT(median(err), 0.002);
+  EXPECT_LT(median(diff), 0.002);
+  EXPECT_THROW(map.predictDepth(pose, CameraIntrinsics{}), InputError);
+}
+
 TEST(StaticMap, StableDepthMatchesTheRayTracedPredictionAndLeavesOutUnstableSurfels) {
   RoomFixture room;
   room.frames = 12;

@@ -136,6 +136,12 @@ class StaticMap {
   // surface it just saw).
   ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
 
+  // predict()'s depth alone for tracking targets, each surfel splatted as a small square inside its
+  // disc's image with its plane's depth instead of as a ray-traced disc: 6.8 against 17 ms at
+  // 320x240 (BM_SurfelPredictDepth), no less accurate for tracking (see kInnerSquare). Pixels
+  // between the squares may stay empty (0).
+  cv::Mat predictDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
+
   // Depth (CV_32FC1, metres, 0 = none) of the stable surfels only, each splatted as a square of its
   // projected diameter with its plane's depth: what the segmentation compares a frame against (a
   // moving object fused once by mistake is not yet part of the background). The square covers a

@@ -143,15 +143,15 @@ std::optional<OdometryFrame> FlowFusionSystem::modelTarget(const RgbdFrame& fram
   // Rendered at the odometry's finest level (the finer input levels are never aligned) and
   // brought to the input size, where the pyramid's 2x2 averages give it back unchanged.
   const int finest = config_.odometry.finest_level;
-  const ModelPrediction pred = map_->predict(T_world_cam, camera_.atLevel(finest));
-  const double covered = cv::countNonZero(pred.depth > 0);
+  const cv::Mat predicted = map_->predictDepth(T_world_cam, camera_.atLevel(finest));
+  const double covered = cv::countNonZero(predicted > 0);
   const double needed = config_.pipeline.model_min_valid_fraction * cv::countNonZero(depth_at_finest > 0);
   if (covered < needed) return std::nullopt;
   // The model's depth is averaged over many frames (less noise, less drift); its colour is
   // blurred by the surfel splats, so the frame's own image stays the photometric target.
   // Where the model has no surface, and at the `keep` pixels, the frame's depth stays.
   cv::Mat depth;
-  cv::resize(pred.depth, depth, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
+  cv::resize(predicted, depth, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
   frame.depth.copyTo(depth, depth <= 0);
   if (!keep.empty()) frame.depth.copyTo(depth, keep);
   return prepareOdometryFrame(frame.intensity, depth, camera_, config_.odometry);
@@ -192,7 +192,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     const SE3 T_target_prev = T_world_target.inverse() * prev_->T_world_cam;
     if (opt.tracking == "frame_to_model" && map_ && map_->size() > 0) {
       t0 = std::chrono::steady_clock::now();
-      if (auto predicted = modelTarget(prev_->frame, prev_->depthAt(config_.odometry.finest_level), prev_->T_world_cam)) {
+      const int finest = config_.odometry.finest_level;
+      if (auto predicted = modelTarget(prev_->frame, prev_->depthAt(finest), prev_->T_world_cam)) {
         model = std::move(*predicted);
         target = &model;
         result.used_model = true;
@@ -344,8 +345,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
         t0 = std::chrono::steady_clock::now();
         // The map has no moving objects; the keyframe's image has, so their pixels keep its depth.
         const int finest = config_.odometry.finest_level;
-        if (auto predicted = modelTarget(frame, finest == 0 ? frame.depth : cur.level(finest).depth, result.T_world_cam,
-                                         result.dynamic_mask)) {
+        const cv::Mat& depth_at_finest = finest == 0 ? frame.depth : cur.level(finest).depth;
+        if (auto predicted = modelTarget(frame, depth_at_finest, result.T_world_cam, result.dynamic_mask)) {
           keyframe_->odo = std::move(*predicted);
           if (!scores.empty()) setTargetWeights(keyframe_->odo, staticWeights(scores));
           keyframe_->from_model = true;

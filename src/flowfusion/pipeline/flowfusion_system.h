@@ -40,17 +40,20 @@ struct PipelineOptions {
   std::string tracking = "frame_to_keyframe";
   double keyframe_translation = 0.05;   // m
   double keyframe_rotation_deg = 5.0;   // deg
-  // A new keyframe takes its depth from the static map predicted at its pose (model_min_valid_fraction
-  // applies; its own image stays the photometric target): frame-to-model tracking whose prediction
-  // is rendered once per keyframe (about one frame in five on fr1/xyz) instead of every frame.
+  // A new keyframe takes its depth from the static map predicted at its pose (StaticMap::predictDepth;
+  // model_min_valid_fraction applies; its own image stays the photometric target, and its dynamic
+  // pixels keep their depth): frame-to-model tracking whose prediction is rendered once per
+  // keyframe (about one frame in five on fr1/xyz) instead of every frame.
   // Measured against plain keyframes (flowfusion run, default otherwise; ATE mm): static fr1 14.8
-  // -> 13.2 (frame to frame 13.7, frame to model 13.7), augmented fr1 16.9 -> 14.9 (frame to frame
-  // 33.1), synth seeds 1-6 (150 frames) 6.0, 3.2, 3.0, 2.9, 2.3, 6.6 -> 4.3, 3.5, 5.5, 1.5, 1.6,
-  // 2.1, their static twins 6.0, 0.6, 0.5, 2.5, 1.2, 4.0 -> 4.6, 3.0, 1.9, 1.3, 1.3, 0.5: the map's
-  // averaged depth helps most on real sensor noise; on the exact synthetic geometry of seeds 2 and
-  // 3 the map's own small errors (its depth 1-2 mm off the frames' median) outweigh it. Mean IoU
-  // about unchanged (augmented fr1 0.643 -> 0.658, synth mean 0.799 -> 0.796). Keyframes every
-  // 3 cm / 3 deg or 10 cm / 10 deg measured no better.
+  // -> 12.9 (frame to frame 13.7, frame to model 13.5), augmented fr1 16.9 -> 14.5 (frame to frame
+  // 33.1), synth seeds 1-6 (150 frames) 6.0, 3.2, 3.0, 2.9, 2.3, 6.6 -> 3.9, 3.4, 5.3, 1.6, 1.7,
+  // 2.3 (mean 4.0 -> 3.0), their static twins 6.0, 0.6, 0.5, 2.5, 1.2, 4.0 -> 4.2, 2.6, 1.7, 1.3,
+  // 1.2, 0.7: the map's averaged depth helps most on real sensor noise; on the exact synthetic
+  // geometry of seeds 2 and 3 the map's own small errors (its depth 1-2 mm off the frames'
+  // median) outweigh it. Mean IoU about unchanged (augmented fr1 0.643 -> 0.660, synth mean
+  // 0.799 -> 0.793). Keyframes every 3 cm / 3 deg or 10 cm / 10 deg measured no better; keeping
+  // the frame's depth wherever it differs from the map's by more than fusion.association_distance_m
+  // (instead of at its dynamic pixels only) was worse on synth seeds 1, 3, 6 (4.8, 8.1, 2.8 mm).
   bool model_keyframes = true;
   bool segmentation = true;          // false: the plain robust odometry (--no-segmentation)
   int max_iterations = 8;            // segmentation <-> odometry rounds at most (paper, Table III)
