@@ -40,7 +40,8 @@ void execute(const RunCommand& c) {
               s.tracking_failures, s.flow_restarts);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
   const std::vector<double> totals = s.timings.frameTotals();
-  std::printf(" (mean total %.1f ms)\n", totals.empty() ? 0.0 : std::accumulate(totals.begin(), totals.end(), 0.0) / totals.size());
+  const double mean_total = totals.empty() ? 0.0 : std::accumulate(totals.begin(), totals.end(), 0.0) / totals.size();
+  std::printf(" (mean total %.1f ms)\n", mean_total);
   if (seq.groundtruth()) {
     const auto ate = eval::computeAte(*seq.groundtruth(), s.trajectory);
     std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,

@@ -2,8 +2,9 @@
 // The per-frame FlowFusion loop (paper Fig. 1, Sections III-A to III-C).
 //
 // Frames: the paper's reference frame A, whose pixels carry clusters, residuals and scores, is
-// here the CURRENT frame, and the frame it is aligned to (the paper's B) is the previous frame or
-// the static map's prediction at the previous pose. The mathematics is the paper's with time
+// here the CURRENT frame, and the frame it is aligned to (the paper's B) is the last keyframe (by
+// default with the static map's depth predicted at its pose), the previous frame, or the map's
+// prediction at the previous pose (PipelineOptions::tracking). The mathematics is the paper's with time
 // reversed; in exchange every frame's dynamic mask, fusion weights and odometry weights live in
 // its own pixels, and the map prediction (static only by construction) is the target, never the
 // weighted side. Optical flow therefore runs from the current to the previous image.
