@@ -3,9 +3,9 @@
 
 #include <cstdio>
 #include <iostream>
-#include <numeric>
 
 #include "command.h"
+#include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/pipeline/run_sequence.h"
 #include "sequence_options.h"
@@ -39,9 +39,7 @@ void execute(const RunCommand& c) {
   std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
               s.tracking_failures, s.flow_restarts);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
-  const std::vector<double> totals = s.timings.frameTotals();
-  const double mean_total = totals.empty() ? 0.0 : std::accumulate(totals.begin(), totals.end(), 0.0) / totals.size();
-  std::printf(" (mean total %.1f ms)\n", mean_total);
+  std::printf(" (mean total %.1f ms)\n", eval::mean(s.timings.frameTotals()));
   if (seq.groundtruth()) {
     const auto ate = eval::computeAte(*seq.groundtruth(), s.trajectory);
     std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,

@@ -63,45 +63,41 @@ void BM_SurfelIntegrate(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfelIntegrate)->Unit(benchmark::kMillisecond);
 
-// Argument: pyramid level of the predicted image (0: 640x480, 1: 320x240).
-void BM_SurfelPredict(benchmark::State& state) {
+// Renders the warm map at the sequence's poses in turn with render(map, T_world_cam, camera).
+// Argument: pyramid level of the rendered image (0: 640x480, 1: 320x240).
+template <class Render>
+void benchRender(benchmark::State& state, Render&& render) {
   const Sequence& seq = sequence();
   const ff::StaticMap map = warmMap(seq);
   const ff::CameraIntrinsics camera = seq.camera.atLevel(static_cast<int>(state.range(0)));
   size_t i = 0;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(map.predict(seq.frames[i % seq.frames.size()].T_world_cam, camera));
+    benchmark::DoNotOptimize(render(map, seq.frames[i % seq.frames.size()].T_world_cam, camera));
     ++i;
   }
   state.counters["surfels"] = static_cast<double>(map.size());
+}
+
+void BM_SurfelPredict(benchmark::State& state) {
+  benchRender(state, [](const ff::StaticMap& m, const ff::SE3& T, const ff::CameraIntrinsics& c) {
+    return m.predict(T, c);
+  });
 }
 BENCHMARK(BM_SurfelPredict)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// predict()'s averaged depth alone from square splats (the model keyframes); argument: level as above.
+// predict()'s averaged depth alone from square splats (the tracking targets).
 void BM_SurfelPredictDepth(benchmark::State& state) {
-  const Sequence& seq = sequence();
-  const ff::StaticMap map = warmMap(seq);
-  const ff::CameraIntrinsics camera = seq.camera.atLevel(static_cast<int>(state.range(0)));
-  size_t i = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(map.predictDepth(seq.frames[i % seq.frames.size()].T_world_cam, camera));
-    ++i;
-  }
-  state.counters["surfels"] = static_cast<double>(map.size());
+  benchRender(state, [](const ff::StaticMap& m, const ff::SE3& T, const ff::CameraIntrinsics& c) {
+    return m.predictDepth(T, c);
+  });
 }
 BENCHMARK(BM_SurfelPredictDepth)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The segmentation's view of the map (stable surfels, square splats); argument: level as above.
+// The segmentation's view of the map (stable surfels, square splats).
 void BM_SurfelPredictStableDepth(benchmark::State& state) {
-  const Sequence& seq = sequence();
-  const ff::StaticMap map = warmMap(seq);
-  const ff::CameraIntrinsics camera = seq.camera.atLevel(static_cast<int>(state.range(0)));
-  size_t i = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(map.predictStableDepth(seq.frames[i % seq.frames.size()].T_world_cam, camera));
-    ++i;
-  }
-  state.counters["surfels"] = static_cast<double>(map.size());
+  benchRender(state, [](const ff::StaticMap& m, const ff::SE3& T, const ff::CameraIntrinsics& c) {
+    return m.predictStableDepth(T, c);
+  });
 }
 BENCHMARK(BM_SurfelPredictStableDepth)->Arg(1)->Unit(benchmark::kMillisecond);
 

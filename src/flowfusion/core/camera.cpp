@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "flowfusion/core/error.h"
@@ -47,6 +48,19 @@ std::optional<LensDistortion> freiburgDistortion(int n) {
   }
 }
 
+CameraModel cameraModelFromValues(const std::vector<double>& v) {
+  if (v.size() != 4 && v.size() != 6 && v.size() != 11)
+    throw std::invalid_argument("cameraModelFromValues: 4, 6 or 11 values, got " + std::to_string(v.size()));
+  CameraModel m;
+  m.intrinsics = CameraIntrinsics{v[0], v[1], v[2], v[3], 640, 480};
+  if (v.size() >= 6) {
+    m.intrinsics.width = static_cast<int>(v[4]);
+    m.intrinsics.height = static_cast<int>(v[5]);
+  }
+  if (v.size() == 11) m.distortion = LensDistortion{v[6], v[7], v[8], v[9], v[10]};
+  return m;
+}
+
 CameraIntrinsics parseCamera(const std::string& spec, const std::string& what) {
   return parseCameraModel(spec, what).intrinsics;
 }
@@ -73,13 +87,7 @@ CameraModel parseCameraModel(const std::string& spec_in, const std::string& what
   if (v.size() != 4 && v.size() != 6 && v.size() != 11) throw InputError(what + ": '" + spec_in + expected);
   for (double x : v)
     if (!std::isfinite(x)) throw InputError(what + ": '" + spec_in + "' holds a value that is not finite");
-  CameraModel m;
-  m.intrinsics = CameraIntrinsics{v[0], v[1], v[2], v[3], 640, 480};
-  if (v.size() >= 6) {
-    m.intrinsics.width = static_cast<int>(v[4]);
-    m.intrinsics.height = static_cast<int>(v[5]);
-  }
-  if (v.size() == 11) m.distortion = LensDistortion{v[6], v[7], v[8], v[9], v[10]};
+  const CameraModel m = cameraModelFromValues(v);
   if (!m.intrinsics.valid()) throw InputError(what + ": '" + spec_in + "' has a non-positive focal length or size");
   return m;
 }

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace ff {
 
@@ -47,6 +48,10 @@ struct CameraModel {
 // coefficients may follow the size: "...,width,height,k1,k2,p1,p2,k3"). Throws InputError naming
 // `what` on anything else.
 CameraModel parseCameraModel(const std::string& spec, const std::string& what = "--camera");
+// The model from fx, fy, cx, cy[, width, height[, k1, k2, p1, p2, k3]] (640x480 when the size is
+// left out); the caller checks the values. Throws std::invalid_argument (a programming mistake)
+// on any other count.
+CameraModel cameraModelFromValues(const std::vector<double>& values);
 CameraIntrinsics parseCamera(const std::string& spec, const std::string& what = "--camera");
 std::optional<CameraIntrinsics> freiburgPreset(int n);
 // The benchmark's published coefficients of the colour camera (the depth images are registered

@@ -47,9 +47,7 @@ CameraModel readCameraFile(const std::string& path) {
   if (!nums.eof() || (v.size() != 6 && v.size() != 11)) in.malformed();
   for (double x : v)
     if (!std::isfinite(x)) in.malformed();
-  CameraModel m;
-  m.intrinsics = CameraIntrinsics{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
-  if (v.size() == 11) m.distortion = LensDistortion{v[6], v[7], v[8], v[9], v[10]};
+  const CameraModel m = cameraModelFromValues(v);
   if (!m.intrinsics.valid()) in.fail("focal lengths and image size must be positive");
   return m;
 }

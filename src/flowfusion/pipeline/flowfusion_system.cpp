@@ -138,18 +138,18 @@ FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntri
 
 FlowFusionSystem::~FlowFusionSystem() = default;
 
-std::optional<OdometryFrame> FlowFusionSystem::modelTarget(const RgbdFrame& frame, const cv::Mat& depth_at_finest,
-                                                           const SE3& T_world_cam, const cv::Mat& keep) const {
+std::optional<OdometryFrame> FlowFusionSystem::modelTarget(const Previous& source, const cv::Mat& keep) const {
   // Rendered at the odometry's finest level (the finer input levels are never aligned) and
   // brought to the input size, where the pyramid's 2x2 averages give it back unchanged.
   const int finest = config_.odometry.finest_level;
-  const cv::Mat predicted = map_->predictDepth(T_world_cam, camera_.atLevel(finest));
+  const cv::Mat predicted = map_->predictDepth(source.T_world_cam, camera_.atLevel(finest));
   const double covered = cv::countNonZero(predicted > 0);
-  const double needed = config_.pipeline.model_min_valid_fraction * cv::countNonZero(depth_at_finest > 0);
+  const double needed = config_.pipeline.model_min_valid_fraction * cv::countNonZero(source.depthAt(finest) > 0);
   if (covered < needed) return std::nullopt;
   // The model's depth is averaged over many frames (less noise, less drift); its colour is
   // blurred by the surfel splats, so the frame's own image stays the photometric target.
   // Where the model has no surface, and at the `keep` pixels, the frame's depth stays.
+  const RgbdFrame& frame = source.frame;
   cv::Mat depth;
   cv::resize(predicted, depth, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
   frame.depth.copyTo(depth, depth <= 0);
@@ -192,8 +192,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     const SE3 T_target_prev = T_world_target.inverse() * prev_->T_world_cam;
     if (opt.tracking == "frame_to_model" && map_ && map_->size() > 0) {
       t0 = std::chrono::steady_clock::now();
-      const int finest = config_.odometry.finest_level;
-      if (auto predicted = modelTarget(prev_->frame, prev_->depthAt(finest), prev_->T_world_cam)) {
+      if (auto predicted = modelTarget(*prev_)) {
         model = std::move(*predicted);
         target = &model;
         result.used_model = true;
@@ -330,7 +329,8 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   }
 
   // As a target (next frame's previous frame or keyframe), this frame's moving pixels count less.
-  if (!scores.empty()) setTargetWeights(cur, staticWeights(scores));
+  const cv::Mat target_weights = scores.empty() ? cv::Mat() : staticWeights(scores);
+  setTargetWeights(cur, target_weights);
 
   if (opt.tracking == "frame_to_keyframe") {
     const SE3 T_kf_cur = keyframe_ ? keyframe_->T_world_cam.inverse() * result.T_world_cam : SE3::Identity();
@@ -344,11 +344,9 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       if (opt.model_keyframes && map_ && map_->size() > 0) {
         t0 = std::chrono::steady_clock::now();
         // The map has no moving objects; the keyframe's image has, so their pixels keep its depth.
-        const int finest = config_.odometry.finest_level;
-        const cv::Mat& depth_at_finest = finest == 0 ? frame.depth : cur.level(finest).depth;
-        if (auto predicted = modelTarget(frame, depth_at_finest, result.T_world_cam, result.dynamic_mask)) {
+        if (auto predicted = modelTarget(*keyframe_, result.dynamic_mask)) {
           keyframe_->odo = std::move(*predicted);
-          if (!scores.empty()) setTargetWeights(keyframe_->odo, staticWeights(scores));
+          setTargetWeights(keyframe_->odo, target_weights);
           keyframe_->from_model = true;
         }
         timings_.add("prediction", since(t0));

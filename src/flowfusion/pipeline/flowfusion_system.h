@@ -140,11 +140,11 @@ class FlowFusionSystem {
 
  private:
   struct Previous;
-  // The map's depth predicted at T_world_cam with `frame`'s image as the photometric target, as an
-  // odometry target; none when the prediction covers less than model_min_valid_fraction of the
-  // frame's depth pixels at the odometry's finest level (depth_at_finest).
-  std::optional<OdometryFrame> modelTarget(const RgbdFrame& frame, const cv::Mat& depth_at_finest,
-                                           const SE3& T_world_cam, const cv::Mat& keep = {}) const;
+  // The map's depth predicted at source's pose with source's image as the photometric target, as
+  // an odometry target (source's own depth at the `keep` pixels and where the map has none); none
+  // when the prediction covers less than model_min_valid_fraction of source's depth pixels at the
+  // odometry's finest level.
+  std::optional<OdometryFrame> modelTarget(const Previous& source, const cv::Mat& keep = {}) const;
   SystemConfig config_;
   CameraIntrinsics camera_;
   DenseOdometry odometry_;

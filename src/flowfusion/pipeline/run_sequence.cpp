@@ -63,15 +63,15 @@ RunSummary runSequence(const TumSequence& sequence, const SystemConfig& config, 
 
   FlowFusionSystem system(config, sequence.camera(), initialPose(sequence, first));
   std::vector<double> load_ms;
+  // Per-frame images are written in the input images' pixels, however the frames were loaded.
+  const auto inputPixels = [&](const cv::Mat& m) {
+    return sequence.undistorter() ? sequence.undistorter()->toRawPixels(m) : m;
+  };
   for (size_t i = first; i <= last; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     const RgbdFrame frame = sequence.load(i);
     load_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     const FrameResult r = system.process(frame);
-    // Per-frame images are written in the input images' pixels, however the frames were loaded.
-    const auto inputPixels = [&](const cv::Mat& m) {
-      return sequence.undistorter() ? sequence.undistorter()->toRawPixels(m) : m;
-    };
     if (write && options.write_masks) {
       const std::string p = (out / "masks" / (timestampName(frame.timestamp) + ".png")).string();
       if (!cv::imwrite(p, inputPixels(r.dynamic_mask))) throw InputError(p + ": cannot write mask");
