@@ -28,6 +28,7 @@ void validate(const OdometryConfig& c) {
   require(c.use_intensity || c.use_depth, "use_intensity and use_depth cannot both be false");
   require(c.depth_sigma_a > 0 && c.depth_sigma_b >= 0, "depth_sigma_a must be positive, depth_sigma_b non-negative");
   require(c.min_depth > 0 && c.max_depth > c.min_depth, "min_depth must be positive and below max_depth");
+  require(c.occlusion_ratio >= 0 && c.occlusion_ratio < 1, "occlusion_ratio must be in [0, 1) (0 turns it off)");
   require(c.min_valid_fraction >= 0 && c.min_valid_fraction < 1, "min_valid_fraction must be in [0, 1)");
   require(c.max_translation > 0 && c.max_rotation_deg > 0, "max_translation and max_rotation_deg must be positive");
 }
@@ -162,6 +163,10 @@ inline float targetWeight(const cv::Mat& weight, const Warp& w) {
   return weight.at<float>(w.y0 + (w.ay > 0.5f ? 1 : 0), w.x0 + (w.ax > 0.5f ? 1 : 0));
 }
 
+// The target's surface at a warp lies in front of the warped point (depth qz) by more than
+// `ratio` of its depth: the point is hidden there.
+inline bool hiddenInTarget(float zB, float qz, float ratio) { return ratio > 0 && zB > 0 && zB < qz * (1.0f - ratio); }
+
 constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
 
 }  // namespace
@@ -197,6 +202,7 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
     const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
     const float slope_sigma = static_cast<float>(c.depth_slope_sigma);
     const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
+    const float occlusion = static_cast<float>(c.occlusion_ratio);
     double prev_cost = std::numeric_limits<double>::infinity();
     SE3 T_before_step = T;
 
@@ -224,6 +230,8 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
               if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
               v_pix *= targetWeight(B.target_weight, w);
               if (v_pix <= 0) continue;
+              const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+              if (hiddenInTarget(zB, w.qz, occlusion)) continue;
               // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
               const float iz = 1.0f / w.qz, iz2 = iz * iz;
               const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
@@ -242,25 +250,22 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
                 a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
                 used = true;
               }
-              if (c.use_depth) {
-                const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
-                if (zB > 0) {
-                  const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
-                  const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
-                  const float slope = std::sqrt(gx * gx + gy * gy);
-                  const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
-                  const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
-                  const float inv_s = 1.0f / sigma;
-                  const float r = (zB - w.qz) * inv_s;
-                  // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
-                  const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
-                  float J[6];
-                  for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
-                  const float q = r * r * inv_c2;
-                  a.add(J, r, v_pix / (1 + q));
-                  a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
-                  used = true;
-                }
+              if (c.use_depth && zB > 0) {
+                const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
+                const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
+                const float slope = std::sqrt(gx * gx + gy * gy);
+                const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
+                const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
+                const float inv_s = 1.0f / sigma;
+                const float r = (zB - w.qz) * inv_s;
+                // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
+                const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
+                float J[6];
+                for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
+                const float q = r * r * inv_c2;
+                a.add(J, r, v_pix / (1 + q));
+                a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
+                used = true;
               }
               if (used) ++a.count;
             }
@@ -333,6 +338,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFra
   const Eigen::Matrix3f R = T_cur_ref.rotation().cast<float>();
   const Eigen::Vector3f t = T_cur_ref.translation().cast<float>();
   const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
+  const float occlusion = static_cast<float>(c.occlusion_ratio);
   cv::parallel_for_(cv::Range(0, A.depth.rows), [&](const cv::Range& range) {
     for (int y = range.start; y < range.end; ++y) {
       const float* dA = A.depth.ptr<float>(y);
@@ -347,8 +353,9 @@ PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFra
                        (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
           continue;
         if (targetWeight(B.target_weight, w) < 0.5f) continue;
-        oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
         const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+        if (hiddenInTarget(zB, w.qz, occlusion)) continue;
+        oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
         if (zB > 0) oD[x] = std::abs(zB - w.qz);
       }
     }
