@@ -257,5 +257,26 @@ TEST(DynamicScores, ModelTermKeepsOnlyGroupsThatMove) {
   EXPECT_LT(paper.b[2], 0.5f);
 }
 
+TEST(DynamicScores, WeakMotionDoesNotKeepTheModelTerm) {
+  // One cluster 2 m in front of the model whose flow residual gives a delta between theta_b and
+  // model_motion_delta: the flow noise of a thin static structure, not the evidence of a moving one.
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 2) << 0, 0);
+  g.num_clusters = 1;
+  g.sizes = {2};
+  g.mean_depth = {1.0f};
+  g.centroids.resize(1);
+  ScoreConfig cfg;
+  const double weak = 0.5 * (cfg.theta_b + cfg.model_motion_delta);
+  ResidualImages r;
+  r.r_F = cv::Mat(1, 2, CV_32F, cv::Scalar(static_cast<float>(weak / cfg.alpha_F)));
+  r.r_M = cv::Mat(1, 2, CV_32F, cv::Scalar(2.0f));
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  EXPECT_NEAR(s.delta[0], weak, 1e-5);  // the model term was dropped
+  EXPECT_LT(s.b[0], 0.5f);
+  cfg.model_motion_delta = cfg.theta_b;  // any motion above theta_b keeps it
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
+}
+
 }  // namespace
 }  // namespace ff

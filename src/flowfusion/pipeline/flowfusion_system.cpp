@@ -36,6 +36,7 @@ void validate(const SystemConfig& c) {
   if (!(c.scores.theta_t > c.scores.theta_b)) throw InputError("scores.theta_t must be greater than scores.theta_b");
   if (!(c.scores.alpha_M >= 0)) throw InputError("scores.alpha_M must be >= 0 (0 turns the model term off)");
   if (!(c.scores.model_margin >= 0)) throw InputError("scores.model_margin must be >= 0");
+  if (!(c.scores.model_motion_delta >= 0)) throw InputError("scores.model_motion_delta must be >= 0");
   if (!(c.scores.model_agreement >= 0 && c.scores.model_agreement <= 1))
     throw InputError("scores.model_agreement must be in [0, 1] (0 turns the map's static evidence off)");
   if (!(c.scores.agreement_margin > 0)) throw InputError("scores.agreement_margin must be > 0");

@@ -171,7 +171,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
       if (b[i] > 0.5 && b[j] > 0.5) parent[root(i)] = root(j);
     std::vector<char> moving(n, 0);
     for (int c = 0; c < n; ++c)
-      if (b[c] > 0.5 && delta[c] > config.theta_b) moving[root(c)] = 1;
+      if (b[c] > 0.5 && delta[c] > config.model_motion_delta) moving[root(c)] = 1;
     bool dropped = false;
     for (int c = 0; c < n; ++c)
       if (b[c] > 0.5 && !moving[root(c)] && model[c] > 0) {
