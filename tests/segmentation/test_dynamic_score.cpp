@@ -207,6 +207,18 @@ TEST(ModelAgreement, OnlySurfacesAtTheModelsDepthAgree) {
   EXPECT_THROW(modelAgreement(depth, cv::Mat(1, 4, CV_32F, cv::Scalar(1)), 0.01), InputError);
 }
 
+TEST(ModelAgreement, ATextureSlidingAlongTheModelsSurfaceDisagrees) {
+  const cv::Mat depth = (cv::Mat_<float>(1, 3) << 1.0f, 1.0f, 1.0f);
+  const cv::Mat model = (cv::Mat_<float>(1, 3) << 1.0f, 1.0f, 1.1f);
+  const cv::Mat grey = (cv::Mat_<float>(1, 3) << 0.5f, 0.9f, 0.5f);
+  const cv::Mat model_grey = (cv::Mat_<float>(1, 3) << 0.55f, 0.3f, 0.5f);
+  const cv::Mat a = modelAgreement(depth, model, 0.01, grey, model_grey, 0.2);
+  EXPECT_EQ(a.at<float>(0, 0), 1.f);  // same depth, about the same grey
+  EXPECT_EQ(a.at<float>(0, 1), 0.f);  // same depth, another texture
+  EXPECT_EQ(a.at<float>(0, 2), 0.f);  // same grey, another depth
+  EXPECT_THROW(modelAgreement(depth, model, 0.01, grey, cv::Mat(1, 2, CV_32F, cv::Scalar(0)), 0.2), InputError);
+}
+
 TEST(DynamicScores, AgreementWithTheMapScalesTheMotionTerms) {
   // Two lone clusters with the same large flow residual (a static pole's silhouette, say); the
   // first lies where the static map has a surface over three quarters of its pixels.

@@ -532,7 +532,7 @@ cv::Mat StaticMap::predictDepth(const SE3& T_world_cam, const CameraIntrinsics& 
   return cv::Mat(h, w, CV_32FC1, const_cast<float*>(depth.data())).clone();
 }
 
-cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
+cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera, cv::Mat* intensity) const {
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
   const CameraView view(T_world_cam, camera, config_.min_depth_m);
@@ -548,11 +548,14 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
     });
   });
   cv::Mat depth(h, w, CV_32FC1);
+  if (intensity) intensity->create(h, w, CV_32FC1);
   for (int y = 0; y < h; ++y) {
     float* row = depth.ptr<float>(y);
+    float* grey = intensity ? intensity->ptr<float>(y) : nullptr;
     for (int x = 0; x < w; ++x) {
       const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
       row[x] = key == kEmpty ? 0.0f : keyDepth(key);
+      if (grey) grey[x] = key == kEmpty ? 0.0f : surfels_[keyIndex(key)].intensity;
     }
   }
   return depth;

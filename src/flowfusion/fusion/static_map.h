@@ -147,8 +147,9 @@ class StaticMap {
   // moving object fused once by mistake is not yet part of the background). The square covers a
   // little more than the disc (depth edges bleed by a pixel towards the far side, which only hides
   // evidence), and without predict()'s per-surfel ellipse bound and ray-disc test it costs about
-  // half as much.
-  cv::Mat predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
+  // half as much. `intensity`, when given, receives the front surfel's intensity per pixel
+  // (CV_32FC1 in [0, 1], 0 = none).
+  cv::Mat predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera, cv::Mat* intensity = nullptr) const;
 
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }

@@ -40,6 +40,8 @@ void validate(const SystemConfig& c) {
   if (!(c.scores.model_agreement >= 0 && c.scores.model_agreement <= 1))
     throw InputError("scores.model_agreement must be in [0, 1] (0 turns the map's static evidence off)");
   if (!(c.scores.agreement_margin > 0)) throw InputError("scores.agreement_margin must be > 0");
+  if (!(c.scores.agreement_intensity > 0))
+    throw InputError("scores.agreement_intensity must be > 0 (1 compares depth alone)");
   if (!(c.scores.temporal_prior >= 0)) throw InputError("scores.temporal_prior must be >= 0 (0 turns the prior off)");
 }
 
@@ -270,10 +272,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       cv::Mat r_M, a_M;
       if (map_ && map_->size() > 0 && (config_.scores.alpha_M > 0 || config_.scores.model_agreement > 0)) {
         t0 = std::chrono::steady_clock::now();
-        const cv::Mat background = map_->predictStableDepth(T_world_target * T_target_cur, seg_camera);
+        cv::Mat background_intensity;
+        const cv::Mat background =
+            map_->predictStableDepth(T_world_target * T_target_cur, seg_camera, &background_intensity);
         if (config_.scores.alpha_M > 0) r_M = modelOcclusion(seg_frame.depth, background, config_.scores.model_margin);
         if (config_.scores.model_agreement > 0)
-          a_M = modelAgreement(seg_frame.depth, background, config_.scores.agreement_margin);
+          a_M = modelAgreement(seg_frame.depth, background, config_.scores.agreement_margin, seg_frame.intensity,
+                               background_intensity, config_.scores.agreement_intensity);
         timings_.add("prediction", since(t0));
       }
       cv::Mat prior;

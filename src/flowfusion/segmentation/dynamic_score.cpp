@@ -192,10 +192,24 @@ cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double 
                         [m](float z, float zm) { return std::max(0.f, zm - z * (1 + m)); });
 }
 
-cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin) {
+cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin, const cv::Mat& intensity,
+                       const cv::Mat& model_intensity, double intensity_margin) {
   const float m = static_cast<float>(margin);
-  return compareToModel(depth, model_depth, "modelAgreement",
-                        [m](float z, float zm) { return std::abs(zm - z) <= m * z ? 1.f : 0.f; });
+  cv::Mat a = compareToModel(depth, model_depth, "modelAgreement",
+                             [m](float z, float zm) { return std::abs(zm - z) <= m * z ? 1.f : 0.f; });
+  if (intensity.empty() && model_intensity.empty()) return a;
+  for (const cv::Mat* i : {&intensity, &model_intensity})
+    if (i->type() != CV_32FC1 || i->size() != depth.size())
+      throw InputError("modelAgreement: intensity and model intensity must be CV_32FC1 of the depth's size");
+  const float mi = static_cast<float>(intensity_margin);
+  for (int v = 0; v < a.rows; ++v) {
+    const float* I = intensity.ptr<float>(v);
+    const float* Im = model_intensity.ptr<float>(v);
+    float* o = a.ptr<float>(v);
+    for (int u = 0; u < a.cols; ++u)
+      if (o[u] == 1.f && std::abs(Im[u] - I[u]) > mi) o[u] = 0.f;
+  }
+  return a;
 }
 
 cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores) {
