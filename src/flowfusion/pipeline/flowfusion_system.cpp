@@ -272,11 +272,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
       cv::Mat r_M, a_M;
       if (map_ && map_->size() > 0 && (config_.scores.alpha_M > 0 || config_.scores.model_agreement > 0)) {
         t0 = std::chrono::steady_clock::now();
+        // The surfels' intensity only serves the agreement.
+        const bool agreement = config_.scores.model_agreement > 0;
         cv::Mat background_intensity;
-        const cv::Mat background =
-            map_->predictStableDepth(T_world_target * T_target_cur, seg_camera, &background_intensity);
+        const cv::Mat background = map_->predictStableDepth(T_world_target * T_target_cur, seg_camera,
+                                                            agreement ? &background_intensity : nullptr);
         if (config_.scores.alpha_M > 0) r_M = modelOcclusion(seg_frame.depth, background, config_.scores.model_margin);
-        if (config_.scores.model_agreement > 0)
+        if (agreement)
           a_M = modelAgreement(seg_frame.depth, background, config_.scores.agreement_margin, seg_frame.intensity,
                                background_intensity, config_.scores.agreement_intensity);
         timings_.add("prediction", since(t0));
