@@ -5,6 +5,7 @@
 
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/synth/people.h"
 #include "flowfusion/synth/scene_model.h"
 #include "flowfusion/synth/synthetic_scene.h"
 
@@ -12,44 +13,14 @@ namespace ff::synth {
 
 namespace {
 
-constexpr uint64_t kAugmentStream = 0x41554730ULL, kAugmentNoise = 0x41554e30ULL;
-
-// Objects live in the world frame but are laid out in the frame of the first camera: they start
-// in front of it and oscillate mostly sideways (so they cross the view), tumbling about their
-// own axis.
-class CameraRelativePath : public ObjectPath {
- public:
-  SE3 T_world_cam0 = SE3::Identity();
-  Eigen::Vector3d p0_cam0 = Eigen::Vector3d::Zero();  // m
-  std::array<Sinusoids, 3> offset;                     // cam0 x, y, z offsets, m
-  Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();    // initial orientation in cam0
-  Eigen::Vector3d spin_axis = Eigen::Vector3d::UnitY();
-  Sinusoids spin;  // rad
-
-  SE3 T_world_object(double t) const override {
-    SE3 T_cam0_obj = SE3::Identity();
-    T_cam0_obj.linear() = R0 * Eigen::AngleAxisd(spin.value(t), spin_axis).toRotationMatrix();
-    T_cam0_obj.translation() = p0_cam0 + Eigen::Vector3d(offset[0].value(t), offset[1].value(t), offset[2].value(t));
-    return T_world_cam0 * T_cam0_obj;
-  }
-  double rmsSpeed() const {
-    double s = 0;
-    for (const auto& o : offset) s += o.rmsDerivative() * o.rmsDerivative();
-    return std::sqrt(s);
-  }
-  nlohmann::json describe() const override {
-    const Eigen::Quaterniond q(T_world_cam0.linear());
-    return {{"type", "camera0_relative"},
-            {"T_world_cam0", {T_world_cam0.translation().x(), T_world_cam0.translation().y(),
-                              T_world_cam0.translation().z(), q.x(), q.y(), q.z(), q.w()}},
-            {"p0_cam0_m", jsonVec(p0_cam0)}, {"x_m", offset[0].describe()}, {"y_m", offset[1].describe()},
-            {"z_m", offset[2].describe()}, {"spin_axis", jsonVec(spin_axis)}, {"spin_rad", spin.describe()}};
-  }
-};
+constexpr uint64_t kAugmentStream = 0x41554730ULL, kAugmentNoise = 0x41554e30ULL, kAugmentPeople = 0x41555050ULL;
 
 void validate(const AugmentConfig& c) {
   const auto bad = [](const std::string& what) { throw InputError("augment configuration: " + what); };
-  if (c.objects < 1 || c.objects > 32) bad("objects must be in 1..32, got " + std::to_string(c.objects));
+  if (c.objects < 0 || c.objects > 32) bad("objects must be in 0..32, got " + std::to_string(c.objects));
+  if (c.people < 0 || c.people > 8) bad("people must be in 0..8, got " + std::to_string(c.people));
+  if (c.objects + c.people < 1) bad("need at least one object or person (objects + people >= 1)");
+  if (!(c.camera_height > 0.3 && c.camera_height < 3)) bad("camera_height must be in (0.3, 3) m");
   if (!(c.min_distance > 0.1 && c.max_distance >= c.min_distance && c.max_distance < 10))
     bad("need 0.1 < min_distance <= max_distance < 10 m");
   if (!(c.object_speed >= 0 && c.object_speed <= 5)) bad("object_speed must be in [0, 5] m/s");
@@ -57,16 +28,22 @@ void validate(const AugmentConfig& c) {
   if (c.first_frame < 0) bad("first frame must be >= 0, got " + std::to_string(c.first_frame));
 }
 
-Item centred(Item shape) {
-  const Eigen::Vector3d mid = 0.5 * (shape.lo + shape.hi);
-  Item out;
-  out.kind = shape.kind;
-  for (Part p : shape.parts) {
-    p.lo -= mid;
-    p.hi -= mid;
-    out.add(p);
+// People walk on a floor camera_height below the first camera (world z up), across its view as seen
+// on the floor, 1.0-1.6 m in front of it.
+void addPeople(SceneModel& model, const AugmentConfig& config, const SE3& T_world_cam0, double duration_s) {
+  Rng rng(hashCombine(config.seed, kAugmentPeople));
+  const Eigen::Vector3d eye = T_world_cam0.translation(), view = T_world_cam0.linear().col(2);
+  SE3 T_world_floor = SE3::Identity();
+  T_world_floor.translation().z() = eye.z() - config.camera_height;
+  WalkLine line;
+  line.eye = eye.head<2>();
+  line.view = view.head<2>().norm() > 1e-6 ? Eigen::Vector2d(view.head<2>().normalized()) : Eigen::Vector2d::UnitX();
+  for (int k = 0; k < config.people; ++k) {
+    line.distance_m = rng.uniform(1.0, 1.6);
+    line.half_m = rng.uniform(0.9, 1.3);
+    const auto body = walkerScript(rng, line, -rng.uniform(0.0, 1.5), duration_s + 1.0, T_world_floor);
+    for (MovingObject& o : personObjects(model, rng, body, k)) model.objects.push_back(std::move(o));
   }
-  return out;
 }
 
 }  // namespace
@@ -119,24 +96,12 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
       }
       obj.shape.kind = "l_shape";
     }
-    auto path = std::make_shared<CameraRelativePath>();
-    path->T_world_cam0 = T_world_cam0;
-    const double z = rng.uniform(config.min_distance, config.max_distance);
-    path->p0_cam0 = Eigen::Vector3d(rng.uniform(-0.4, 0.4) * z * tan_x, rng.uniform(-0.3, 0.3) * z * tan_y, z);
-    path->offset[0] = randomSinusoids(rng, {{rng.uniform(0.5, 0.8) * z * tan_x, 0.1}, {0.05, 0.3}});
-    path->offset[1] = randomSinusoids(rng, {{0.15 * z * tan_y, 0.15}});
-    path->offset[2] = randomSinusoids(rng, {{0.1 * z, 0.12}});
-    path->R0 = (Eigen::AngleAxisd(rng.uniform(0, 2 * M_PI), Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(rng.uniform(-0.4, 0.4), Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-    path->spin_axis = Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal()).normalized();
-    path->spin = randomSinusoids(rng, {{rng.uniform(0.5, 1.5), 0.1}});
-    const double k_t = config.object_speed / std::max(1e-9, path->rmsSpeed());
-    for (auto& o : path->offset) o.scaleTime(k_t);
-    path->spin.scaleTime(k_t);
+    const auto path = crossingPath(rng, T_world_cam0, tan_x, tan_y, config.min_distance, config.max_distance,
+                                   config.object_speed);
     obj.path = path;
     model.objects.push_back(std::move(obj));
   }
+  addPeople(model, config, T_world_cam0, seq.entry(kept.back().first).rgb_timestamp - t0);
   // A light above and behind the first camera, so the objects are lit roughly like the room.
   model.light.position = T_world_cam0 * Eigen::Vector3d(0.5, -2.0, -0.5);
   model.light.ambient = 0.45;

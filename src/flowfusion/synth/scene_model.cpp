@@ -1,5 +1,6 @@
 #include "flowfusion/synth/scene_model.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -151,6 +152,48 @@ nlohmann::json CameraPath::describe() const {
           {"yaw_rad", yaw.describe()}, {"pitch_rad", pitch.describe()}, {"roll_rad", roll.describe()}};
 }
 
+SE3 CameraRelativePath::T_world_object(double t) const {
+  SE3 T_cam0_obj = SE3::Identity();
+  T_cam0_obj.linear() = R0 * Eigen::AngleAxisd(spin.value(t), spin_axis).toRotationMatrix();
+  T_cam0_obj.translation() = p0_cam0 + Eigen::Vector3d(offset[0].value(t), offset[1].value(t), offset[2].value(t));
+  return T_world_cam0 * T_cam0_obj;
+}
+
+double CameraRelativePath::rmsSpeed() const {
+  double s = 0;
+  for (const auto& o : offset) s += o.rmsDerivative() * o.rmsDerivative();
+  return std::sqrt(s);
+}
+
+nlohmann::json CameraRelativePath::describe() const {
+  const Eigen::Quaterniond q(T_world_cam0.linear());
+  return {{"type", "camera0_relative"},
+          {"T_world_cam0", {T_world_cam0.translation().x(), T_world_cam0.translation().y(),
+                            T_world_cam0.translation().z(), q.x(), q.y(), q.z(), q.w()}},
+          {"p0_cam0_m", jsonVec(p0_cam0)}, {"x_m", offset[0].describe()}, {"y_m", offset[1].describe()},
+          {"z_m", offset[2].describe()}, {"spin_axis", jsonVec(spin_axis)}, {"spin_rad", spin.describe()}};
+}
+
+std::shared_ptr<CameraRelativePath> crossingPath(Rng& rng, const SE3& T_world_cam0, double tan_x, double tan_y,
+                                                 double min_distance, double max_distance, double speed_mps) {
+  auto path = std::make_shared<CameraRelativePath>();
+  path->T_world_cam0 = T_world_cam0;
+  const double z = rng.uniform(min_distance, max_distance);
+  path->p0_cam0 = Eigen::Vector3d(rng.uniform(-0.4, 0.4) * z * tan_x, rng.uniform(-0.3, 0.3) * z * tan_y, z);
+  path->offset[0] = randomSinusoids(rng, {{rng.uniform(0.5, 0.8) * z * tan_x, 0.1}, {0.05, 0.3}});
+  path->offset[1] = randomSinusoids(rng, {{0.15 * z * tan_y, 0.15}});
+  path->offset[2] = randomSinusoids(rng, {{0.1 * z, 0.12}});
+  path->R0 = (Eigen::AngleAxisd(rng.uniform(0, 2 * M_PI), Eigen::Vector3d::UnitY()) *
+              Eigen::AngleAxisd(rng.uniform(-0.4, 0.4), Eigen::Vector3d::UnitX()))
+                 .toRotationMatrix();
+  path->spin_axis = Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal()).normalized();
+  path->spin = randomSinusoids(rng, {{rng.uniform(0.5, 1.5), 0.1}});
+  const double k_t = speed_mps / std::max(1e-9, path->rmsSpeed());
+  for (auto& o : path->offset) o.scaleTime(k_t);
+  path->spin.scaleTime(k_t);
+  return path;
+}
+
 Sinusoids randomSinusoids(Rng& rng, const std::vector<std::pair<double, double>>& amp_freq_hz) {
   Sinusoids s;
   for (const auto& [a, f] : amp_freq_hz)
@@ -198,6 +241,18 @@ Item boxShape(SceneModel& m, Rng& rng, double min_side, double max_side) {
   it.add(box(Eigen::Vector3d(-size.x() / 2, -size.y() / 2, 0), Eigen::Vector3d(size.x() / 2, size.y() / 2, size.z()),
              tex, rng));
   return it;
+}
+
+Item centred(Item shape) {
+  const Eigen::Vector3d mid = 0.5 * (shape.lo + shape.hi);
+  Item out;
+  out.kind = shape.kind;
+  for (Part p : shape.parts) {
+    p.lo -= mid;
+    p.hi -= mid;
+    out.add(p);
+  }
+  return out;
 }
 
 int SceneModel::addTexture(Material m, Rng& rng) {

@@ -52,6 +52,27 @@ class ObjectPath {
   virtual nlohmann::json describe() const = 0;
 };
 
+// Laid out in the frame of a camera at time 0 (cam0): starts in front of it and oscillates mostly
+// sideways (so it crosses the view), tumbling about its own axis.
+class CameraRelativePath : public ObjectPath {
+ public:
+  SE3 T_world_cam0 = SE3::Identity();
+  Eigen::Vector3d p0_cam0 = Eigen::Vector3d::Zero();  // m
+  std::array<Sinusoids, 3> offset;                     // cam0 x, y, z offsets, m
+  Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();    // initial orientation in cam0
+  Eigen::Vector3d spin_axis = Eigen::Vector3d::UnitY();
+  Sinusoids spin;  // rad
+
+  SE3 T_world_object(double t) const override;
+  double rmsSpeed() const;  // m/s
+  nlohmann::json describe() const override;
+};
+
+// A random crossing path at a distance in [min_distance, max_distance] (m) in front of cam0, whose
+// view spans tan_x, tan_y (half-width and half-height over the focal length), RMS speed speed_mps.
+std::shared_ptr<CameraRelativePath> crossingPath(Rng& rng, const SE3& T_world_cam0, double tan_x, double tan_y,
+                                                 double min_distance, double max_distance, double speed_mps);
+
 struct MovingObject {
   Item shape;  // parts in the object frame
   std::shared_ptr<const ObjectPath> path;
@@ -121,6 +142,8 @@ Part box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int texture, Rng&
 // Upright person-sized shape (legs, torso, arms, head; about 0.6 x 0.35 x 1.75 m), object frame:
 // origin on the floor, x forward, z up. Adds its clothing and skin textures to m.
 Item personShape(SceneModel& m, Rng& rng);
+// The same shape with its bounds centred on the object frame's origin (for tumbling objects).
+Item centred(Item shape);
 // A textured box (cardboard or printed) with sides in [min_side, max_side] (height up to 1.3x),
 // standing on the object frame's origin.
 Item boxShape(SceneModel& m, Rng& rng, double min_side, double max_side);

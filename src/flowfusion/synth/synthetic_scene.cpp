@@ -9,6 +9,7 @@
 
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/synth/people.h"
 #include "flowfusion/synth/scene_model.h"
 
 namespace ff::synth {
@@ -19,6 +20,9 @@ constexpr double kDeg = M_PI / 180.0;
 // Salts that split the seed into independent streams: the static twin (objects = 0) must get the
 // same room and camera, whatever the objects draw.
 constexpr uint64_t kRoomStream = 0x524f4f4dULL, kObjectStream = 0x4f424a53ULL, kNoiseStream = 0x4e4f4953ULL;
+// Streams of the hard-case options, one each, so that none of them changes the others' draws.
+constexpr uint64_t kRpyStream = 0x52505953ULL, kSeatStream = 0x53454154ULL, kPeopleStream = 0x50504c45ULL,
+                   kNearStream = 0x4e454152ULL, kPushedStream = 0x50555348ULL;
 
 // Objects move back and forth on an arc around the room centre (so they cross the camera's view),
 // with a slow radial wobble. People face where they walk and turn round smoothly at the ends.
@@ -286,6 +290,111 @@ void addObjects(SceneModel& m, Rng& rng, const SynthConfig& cfg, const CameraPat
   }
 }
 
+// Rotation about all three axes at similar amplitudes (+-15-20 degrees, 0.3-0.9 Hz), scaled to the
+// configured RMS angular speed; the translation stays the hand-held one.
+void makeRpy(CameraPath& cam, const SynthConfig& cfg) {
+  Rng rng(hashCombine(cfg.seed, kRpyStream));
+  cam.yaw = randomSinusoids(rng, {{18 * kDeg, 0.3}, {6 * kDeg, 0.7}});
+  cam.pitch = randomSinusoids(rng, {{14 * kDeg, 0.35}, {5 * kDeg, 0.8}});
+  cam.roll = randomSinusoids(rng, {{14 * kDeg, 0.4}, {5 * kDeg, 0.9}});
+  const double w2 = cam.yaw.rmsDerivative() * cam.yaw.rmsDerivative() +
+                    cam.pitch.rmsDerivative() * cam.pitch.rmsDerivative() +
+                    cam.roll.rmsDerivative() * cam.roll.rmsDerivative();
+  const double k_r = cfg.camera_angular_speed * kDeg / std::sqrt(w2);
+  cam.yaw.scaleTime(k_r);
+  cam.pitch.scaleTime(k_r);
+  cam.roll.scaleTime(k_r);
+}
+
+// The first camera's view as seen on the floor: where people walk, seats and pushed objects stand.
+WalkLine firstView(const CameraPath& cam) {
+  const SE3 T = cam.T_world_cam(0.0);
+  WalkLine line;
+  line.eye = T.translation().head<2>();
+  const Eigen::Vector2d v = T.linear().col(2).head<2>();
+  line.view = v.norm() > 1e-6 ? Eigen::Vector2d(v.normalized()) : Eigen::Vector2d::UnitX();
+  return line;
+}
+
+struct Seat {
+  Eigen::Vector2d centre;
+  double height;
+};
+
+std::vector<Seat> addSeats(SceneModel& m, const SynthConfig& cfg, const WalkLine& view) {
+  Rng rng(hashCombine(cfg.seed, kSeatStream));
+  std::vector<Seat> seats;
+  for (int k = 0; k < cfg.seats; ++k) {
+    const double lateral = (k - 0.5 * (cfg.seats - 1)) * 1.1 + rng.uniform(-0.2, 0.2);
+    WalkLine line = view;
+    line.distance_m = rng.uniform(1.9, 2.3);
+    const Seat seat{line.point(lateral), rng.uniform(0.42, 0.47)};
+    const int tex = m.addTexture(rng.chance(0.5) ? Material::Cardboard : Material::Painted, rng);
+    Item it;
+    it.kind = "seat";
+    it.add(box(Eigen::Vector3d(seat.centre.x() - 0.21, seat.centre.y() - 0.21, 0),
+               Eigen::Vector3d(seat.centre.x() + 0.21, seat.centre.y() + 0.21, seat.height), tex, rng));
+    m.furniture.push_back(it);
+    seats.push_back(seat);
+  }
+  return seats;
+}
+
+std::vector<std::shared_ptr<const Body>> addPeople(SceneModel& m, const SynthConfig& cfg, const WalkLine& view,
+                                                   const std::vector<Seat>& seats) {
+  Rng rng(hashCombine(cfg.seed, kPeopleStream));
+  const double t_end = cfg.frames / cfg.fps + 1.0;
+  std::vector<std::shared_ptr<const Body>> people;
+  for (int k = 0; k < cfg.people; ++k) {
+    WalkLine line = view;
+    std::shared_ptr<const Body> body;
+    if (k < static_cast<int>(seats.size())) {
+      line.distance_m = (seats[k].centre - view.eye).dot(view.view) - 0.38;
+      body = sitterScript(rng, line, seats[k].centre, seats[k].height, -rng.uniform(0.0, 1.0), t_end);
+    } else {
+      line.distance_m = rng.uniform(1.7, 2.4);
+      line.half_m = rng.uniform(1.1, 1.5);
+      body = walkerScript(rng, line, -rng.uniform(0.0, 1.5), t_end);
+    }
+    for (MovingObject& o : personObjects(m, rng, body, k)) m.objects.push_back(std::move(o));
+    people.push_back(body);
+  }
+  return people;
+}
+
+void addNearObjects(SceneModel& m, const SynthConfig& cfg, const CameraPath& cam, const CameraIntrinsics& K) {
+  Rng rng(hashCombine(cfg.seed, kNearStream));
+  const double tan_x = 0.5 * K.width / K.fx, tan_y = 0.5 * K.height / K.fy;
+  for (int k = 0; k < cfg.near_objects; ++k) {
+    MovingObject obj;
+    obj.shape = centred(boxShape(m, rng, 0.55, 0.8));
+    obj.shape.kind = "near_box";
+    obj.path = crossingPath(rng, cam.T_world_cam(0.0), tan_x, tan_y, 0.9, 1.4, cfg.object_speed);
+    m.objects.push_back(std::move(obj));
+  }
+}
+
+void addPushedObjects(SceneModel& m, const SynthConfig& cfg, const WalkLine& view) {
+  Rng rng(hashCombine(cfg.seed, kPushedStream));
+  for (int k = 0; k < cfg.pushed_objects; ++k) {
+    MovingObject obj;
+    obj.shape = rng.chance(0.6) ? chairShape(m, rng) : boxShape(m, rng, 0.4, 0.6);
+    WalkLine line = view;
+    line.distance_m = rng.uniform(1.4, 2.2);
+    auto path = std::make_shared<PushedPath>();
+    const Eigen::Vector2d at = line.point(rng.uniform(-0.6, 0.6));
+    path->base.translation() = Eigen::Vector3d(at.x(), at.y(), 0);
+    path->base.linear() = Eigen::AngleAxisd(rng.uniform(0, 2 * M_PI), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector2d push = rng.sign() * rng.uniform(0.6, 1.0) * line.lateral() + rng.uniform(-0.2, 0.2) * line.view;
+    path->push = Eigen::Vector3d(push.x(), push.y(), 0);
+    path->rest_s = cfg.rest_s;
+    path->push_s = rng.uniform(1.2, 1.8);
+    path->spin_rad = rng.uniform(-0.4, 0.4);
+    obj.path = path;
+    m.objects.push_back(std::move(obj));
+  }
+}
+
 CameraIntrinsics scaledFr1(int width, int height) {
   CameraIntrinsics c = *freiburgPreset(1);
   const double sx = width / 640.0, sy = height / 480.0;
@@ -314,6 +423,15 @@ void validate(const SynthConfig& c) {
     bad("need 0 <= min_depth < max_depth <= 13 m (16-bit PNG at 5000/m)");
   if (!(c.color_noise >= 0 && c.color_noise <= 50)) bad("color_noise must be in [0, 50] levels");
   if (!std::isfinite(c.start_time) || c.start_time < 0) bad("start_time must be >= 0 s");
+  if (c.people < 0 || c.people > 8) bad("people must be in 0..8, got " + std::to_string(c.people));
+  if (c.seats < 0 || c.seats > 4) bad("seats must be in 0..4, got " + std::to_string(c.seats));
+  if (c.near_objects < 0 || c.near_objects > 4) bad("near_objects must be in 0..4, got " + std::to_string(c.near_objects));
+  if (c.pushed_objects < 0 || c.pushed_objects > 4)
+    bad("pushed_objects must be in 0..4, got " + std::to_string(c.pushed_objects));
+  if (!(c.rest_s >= 0 && c.rest_s <= 600)) bad("rest_s must be in [0, 600] s");
+  if (!(c.exposure_ms >= 0 && c.exposure_ms <= 200)) bad("exposure_ms must be in [0, 200] ms");
+  if (c.exposure_samples < 2 || c.exposure_samples > 64)
+    bad("exposure_samples must be in 2..64, got " + std::to_string(c.exposure_samples));
 }
 
 }  // namespace
@@ -323,9 +441,16 @@ SyntheticScene::SyntheticScene(const SynthConfig& config)
   validate(config_);
   camera_ = scaledFr1(config_.width, config_.height);
   Rng room_rng(hashCombine(config_.seed, kRoomStream));
-  const CameraPath cam = buildRoom(*model_, room_rng, config_);
+  CameraPath cam = buildRoom(*model_, room_rng, config_);
+  if (config_.camera_motion == CameraMotion::Rpy) makeRpy(cam, config_);
   Rng object_rng(hashCombine(config_.seed, kObjectStream));
   addObjects(*model_, object_rng, config_, cam);
+  const WalkLine view = firstView(cam);
+  const std::vector<Seat> seats = addSeats(*model_, config_, view);
+  first_person_object_ = objectCount();
+  people_ = addPeople(*model_, config_, view, seats);
+  addNearObjects(*model_, config_, cam, camera_);
+  addPushedObjects(*model_, config_, view);
   camera_path_ = std::make_shared<CameraPath>(cam);
 }
 
@@ -358,11 +483,12 @@ SynthFrame SyntheticScene::renderAt(const SE3& T_world_cam, double time_s) const
   opt.color_noise = config_.color_noise;
   opt.noise_key = hashCombine(hashCombine(config_.seed, kNoiseStream),
                               static_cast<uint64_t>(std::llround(time_s * 1e6)));
-  const RenderedLayer layer = model_->cast(T_world_cam, time_s - config_.start_time, camera_);
+  const double t = time_s - config_.start_time;
+  const RenderedLayer layer = model_->cast(T_world_cam, t, camera_);
   SynthFrame out;
   out.T_world_cam = T_world_cam;
   out.frame.timestamp = time_s;
-  out.frame.color = finishColor(layer.color, opt);
+  out.frame.color = finishColor(config_.exposure_ms > 0 ? exposureColor(T_world_cam, t) : layer.color, opt);
   out.frame.intensity = intensityFromBgr(out.frame.color);
   out.frame.depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
   out.frame.name = "synth:" + timestampName(time_s);
@@ -371,6 +497,20 @@ SynthFrame SyntheticScene::renderAt(const SE3& T_world_cam, double time_s) const
   out.depth_clean = layer.depth_clean;
   return out;
 }
+
+cv::Mat SyntheticScene::exposureColor(const SE3& T_world_cam, double t) const {
+  // The camera moves during the exposure as along its path, relative to the requested pose.
+  const SE3 T_path_inv = camera_path_->T_world_cam(t).inverse();
+  const int n = config_.exposure_samples;
+  cv::Mat sum(camera_.height, camera_.width, CV_32FC3, cv::Scalar::all(0));
+  for (int s = 0; s < n; ++s) {
+    const double ts = t + 1e-3 * config_.exposure_ms * ((s + 0.5) / n - 0.5);
+    sum += model_->cast(T_world_cam * (T_path_inv * camera_path_->T_world_cam(ts)), ts, camera_).color;
+  }
+  return sum * (1.0 / n);
+}
+
+std::shared_ptr<const Body> SyntheticScene::person(int k) const { return people_.at(k); }
 
 nlohmann::json SyntheticScene::description() const {
   nlohmann::json j;
@@ -386,6 +526,9 @@ nlohmann::json SyntheticScene::description() const {
   j["camera_path"] = camera_path_->describe();
   j["furniture"] = nlohmann::json::array();
   for (const Item& it : model_->furniture) j["furniture"].push_back(it.describe());
+  j["people"] = nlohmann::json::array();
+  for (const auto& body : people_) j["people"].push_back(body->describe());
+  j["first_person_object"] = first_person_object_;
   j["objects"] = nlohmann::json::array();
   for (const MovingObject& o : model_->objects) {
     nlohmann::json oj = o.shape.describe();

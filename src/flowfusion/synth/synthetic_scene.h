@@ -4,7 +4,10 @@
 // A procedurally generated room (walls, floor, ceiling, furniture-sized boxes, pictures) textured
 // with fractal 1/f noise, wood grain, blobs and edges, lit by a view-independent point light (so
 // brightness constancy holds exactly for static surfaces), seen by a hand-held-like camera on a
-// smooth trajectory, with K rigid moving objects (upright person-sized shapes and boxes).
+// smooth trajectory, with K rigid moving objects (upright person-sized shapes and boxes), and, for the
+// hard cases of real dynamic scenes, articulated people who walk, stop, turn, sit down and get up
+// (people.h), fast camera rotation, motion blur, large movers near the camera and objects that rest
+// and are then pushed.
 // Everything is analytic ray casting: per pixel the nearest hit of planes and boxes.
 //
 // World frame: metres, z up, the room spans [0, W] x [0, D] x [0, H]. Camera frame: x right,
@@ -30,6 +33,11 @@ namespace ff::synth {
 // Bumped whenever the same seed would produce different images; written to scene.json.
 inline constexpr int kGeneratorVersion = 1;
 
+// How the camera moves: a hand-held sweep (mostly yaw, as TUM fr1/xyz, fr3 walking_xyz) or fast
+// rotation about all three axes with little translation (as TUM fr1/rpy, fr3 walking_rpy).
+enum class CameraMotion { Handheld, Rpy };
+NLOHMANN_JSON_SERIALIZE_ENUM(CameraMotion, {{CameraMotion::Handheld, "handheld"}, {CameraMotion::Rpy, "rpy"}})
+
 struct SynthConfig {
   uint64_t seed = 1;        // selects room, trajectory, objects and noise
   int frames = 300;         // number of frames
@@ -45,16 +53,27 @@ struct SynthConfig {
   double min_depth = 0.4;   // m, nearer surfaces have no depth (noise = true only)
   double max_depth = 6.0;   // m, farther surfaces have no depth (noise = true only)
   double color_noise = 1.5; // colour sensor noise sigma, 8-bit levels (noise = true only)
+  // The hard cases of real dynamic scenes. At their defaults (0, handheld) a seed renders exactly as
+  // before they existed; each draws from its own random stream, so they do not change each other.
+  int people = 0;           // articulated people walking across the first view (12 moving objects each)
+  int seats = 0;            // seats (static boxes) in the first view; person k < seats sits on seat k
+  int near_objects = 0;     // large boxes (0.55-0.8 m) 0.9-1.4 m in front of the first camera, crossing it
+  int pushed_objects = 0;   // chairs and boxes in view that rest, are pushed, rest, are pushed back
+  double rest_s = 3.0;      // s, how long pushed objects rest before each push
+  CameraMotion camera_motion = CameraMotion::Handheld;
+  double exposure_ms = 0;   // ms, motion blur: colour averaged over this exposure centred on the timestamp (0: off)
+  int exposure_samples = 8; // sub-frame renders averaged when exposure_ms > 0
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, frames, objects, width, height, fps, start_time,
                                                 camera_speed, camera_angular_speed, object_speed, noise, min_depth,
-                                                max_depth, color_noise)
+                                                max_depth, color_noise, people, seats, near_objects, pushed_objects,
+                                                rest_s, camera_motion, exposure_ms, exposure_samples)
 
 struct SynthFrame {
   RgbdFrame frame;        // colour, intensity, depth (metres, noisy and quantised to 1/5000 m unless noise = false)
   SE3 T_world_cam;        // exact
-  cv::Mat mask;           // CV_8UC1, 255 where a moving object is visible, else 0
-  cv::Mat object_id;      // CV_8UC1, 0 = static scene, k + 1 = moving object k
+  cv::Mat mask;           // CV_8UC1, 255 where a moving object is visible, else 0 (at the timestamp, also with blur)
+  cv::Mat object_id;      // CV_8UC1, 0 = static scene, k + 1 = moving object k (a person is 12 of them)
   cv::Mat depth_clean;    // CV_32FC1, exact depth of the visible surface, m (0 = none)
 };
 
@@ -62,6 +81,7 @@ struct SynthFrame {
 double depthNoiseSigma(double z_m);
 
 class SceneModel;  // geometry, textures and motion (scene_model.h)
+class Body;        // an articulated person (body.h)
 struct CameraPath;
 
 class SyntheticScene {
@@ -86,14 +106,24 @@ class SyntheticScene {
   // Noise is seeded by the time, so render(i) == renderAt(cameraPose(i), timestamp(i)).
   SynthFrame renderAt(const SE3& T_world_cam, double time_s) const;
 
-  // scene.json content: seed, configuration, room, furniture, objects (sizes, paths), version.
+  // The articulated people: person k is moving objects firstPersonObject() + 12 k ... + 12 k + 11,
+  // in the order of BodyPart.
+  int personCount() const { return static_cast<int>(people_.size()); }
+  int firstPersonObject() const { return first_person_object_; }
+  std::shared_ptr<const Body> person(int k) const;
+
+  // scene.json content: seed, configuration, room, furniture, people, objects (sizes, paths), version.
   nlohmann::json description() const;
 
  private:
+  cv::Mat exposureColor(const SE3& T_world_cam, double t) const;  // t: s since the sequence start
+
   SynthConfig config_;
   CameraIntrinsics camera_;
   std::unique_ptr<SceneModel> model_;
   std::shared_ptr<const CameraPath> camera_path_;
+  std::vector<std::shared_ptr<const Body>> people_;
+  int first_person_object_ = 0;
 };
 
 // Writes every frame in the TUM layout (rgb/, depth/, masks/, rgb.txt, depth.txt, groundtruth.txt,
@@ -103,7 +133,7 @@ void writeSequence(const SyntheticScene& scene, const std::string& out_dir, bool
 // Inserting moving objects into a real static sequence with ground-truth poses.
 struct AugmentConfig {
   uint64_t seed = 1;           // selects objects, paths and noise
-  int objects = 2;             // number of inserted objects (>= 1)
+  int objects = 2;             // number of inserted boxes (objects + people >= 1)
   int first_frame = 0;         // first colour frame used (index into rgb.txt after association)
   int last_frame = -1;         // last colour frame used, inclusive (-1: the last one)
   double min_distance = 0.7;   // m, nearest initial object distance from the first camera
@@ -111,9 +141,13 @@ struct AugmentConfig {
   double object_speed = 0.4;   // RMS speed of the objects, m/s
   bool noise = true;           // Kinect-like noise and quantisation on the object depth
   double max_pose_gap = 0.1;   // s, largest ground-truth gap bridged by interpolation
+  // Articulated people walking across the first camera's view, 1.0-1.6 m in front of it, on a floor
+  // camera_height below the first camera (the world's z axis is taken as up, as in TUM's ground truth).
+  int people = 0;
+  double camera_height = 1.45;  // m, height of the first camera above the floor
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AugmentConfig, seed, objects, first_frame, last_frame, min_distance,
-                                                max_distance, object_speed, noise, max_pose_gap)
+                                                max_distance, object_speed, noise, max_pose_gap, people, camera_height)
 
 struct AugmentReport {
   int frames_written = 0;
