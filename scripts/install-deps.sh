@@ -9,4 +9,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   cmake g++ make pkg-config \
   libeigen3-dev libopencv-dev libopencv-contrib-dev libpcl-dev libopen3d-dev \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
-  libspdlog-dev libfmt-dev libtbb-dev
+  libspdlog-dev libfmt-dev libtbb-dev \
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-distributed
