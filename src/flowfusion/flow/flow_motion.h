@@ -7,7 +7,7 @@
 // walking into view), the odometry can lock onto the object, every later stage then calls the
 // background dynamic and the carried scores keep the error going. The flow's rigid consensus
 // does not depend on the odometry: where it explains clearly more of the image than the
-// odometry's motion, the odometry is restarted from it (FlowFusionSystem).
+// odometry's motion, the odometry is restarted from it (pipeline/segmentation_loop.h).
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -21,24 +21,13 @@ namespace ff {
 struct ConsensusConfig {
   bool enabled = true;
   int grid_step = 16;           // px: flow correspondences sampled on this grid of the input image
-  // px: reprojection error of a correspondence the motion explains. On synthetic frames a correct
-  // odometry explains 90-100 % of the flow within 1.5 px; on the shared fr1/xyz frames it explains
-  // 28 % within 1.5 px, 63 % within 3 px and 87 % within 5 px (mean over frames), because the
-  // colour and depth images are taken up to 20 ms apart (the odometry's motion is the depth
-  // images', the flow's the colour images'; in about one pair of frames in four the two
-  // intervals differ by a whole frame) and real flow is less exact.
+  // px: reprojection error of a correspondence the motion explains. Loose because TUM's colour
+  // and depth images are up to 20 ms apart, so a correct odometry explains the real flow less
+  // exactly than the synthetic one (docs/tuning.md#consensus).
   double inlier_px = 3.0;
   int ransac_iterations = 100;  // minimal-sample (P3P) hypotheses
   // The flow's motion replaces the odometry's when it explains at least this fraction of the
-  // samples more. Measured (flowfusion run, all frames checked; ATE mm, restarts):
-  //   inlier_px / min_gain   synth seed 3       fr1 static      fr1 augmented
-  //   off                    117 / 0            14.7 / 0        16.2 / 0
-  //   1.5 / 0.15             3.8 / -            15.1 / most     17.6 / most
-  //   3 / 0.3                3.0 / 2            14.8 / 120      16.9 / 95
-  //   3 / 0.45               5.6 / 1            14.8 / 89       16.8 / 59
-  //   5 / 0.3                9.2 / 1            14.8 / 33       15.7 / 29
-  // Synth seeds 1, 2, 4, 5, 6 restart in no frame with 3 / 0.3 or 5 / 0.3. A restart that does not help
-  // converges back to about the same pose (fr1 +0.1 mm) and costs one more odometry (~7 ms).
+  // samples more: a restart that does not help costs one more odometry (docs/tuning.md#consensus).
   double min_gain = 0.3;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,

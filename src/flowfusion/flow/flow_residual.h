@@ -1,5 +1,5 @@
 #pragma once
-// Ego flow and flow residual (NOTES.md step 3, Eqs. 8-9).
+// Ego flow and flow residual (paper Eqs. 8-9; docs/design.md).
 #include <opencv2/core.hpp>
 
 #include "flowfusion/core/camera.h"

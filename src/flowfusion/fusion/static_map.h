@@ -3,26 +3,15 @@
 // fed per pixel with the static weight (1 - b) of the segmentation, rendered for frame-to-model
 // tracking, exported as PLY.
 //
-// Why surfels and not a TSDF (build-*/bench/flowfusion_microbench --benchmark_filter='Surfel|Tsdf',
-// 2 shared cores, 640x480 noisy synthetic room with two moving objects, medians; measured while
-// other builds loaded the machine, so wall ~= CPU time of one core):
-// - Open3D's legacy ScalableTSDFVolume (the only TSDF that runs on CPU in Debian's Open3D 0.16)
-//   integrates one frame in 56 ms at 1 cm voxels, 17 ms at 2 cm (BM_Open3dTsdfIntegrate), and has
-//   no ray caster: model prediction would come on top of that.
-// - This surfel map integrates at 320x240 in 9-13 ms and predicts 320x240 in 9 ms, 640x480 in
-//   23-44 ms (ray-disc splatting, so planes come out exact): integrate + predict 17 ms per frame
-//   with a 320x240 prediction, 30 ms at 640x480 (BM_SurfelIntegratePredict). Since the z-buffers
-//   are per thread (no atomics), on an idle machine: integrate 6.5 ms, predictStableDepth 3.6 ms
-//   at 320x240 (~200k surfels); predict with its second, depth-averaging pass 16.8 ms at 320x240,
-//   38 ms at 640x480 (7.9 and 17.7 ms with one pass). On exact synthetic
-//   data the map points lie 0.03 mm (mean) from the true planes and the prediction at a fused pose
-//   reproduces the depth to < 0.01 mm median (tests/fusion).
-// - Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
-//   measured depth (the camera sees through it) gets a free-space vote, and one at the depth of a
-//   pixel weighted as dynamic a dynamic vote; a surfel with more votes than support is removed.
-//   Surfels that never become stable (confidence below stable_confidence within
-//   unstable_window_frames) are removed too. A background that was
-//   occluded gets new surfels as soon as it is seen with weight.
+// Why surfels and not a TSDF: on the CPU, Open3D's TSDF (the one Debian ships) takes as long to
+// integrate a frame at 2 cm voxels as this map takes to integrate and render it, and has no ray
+// caster for the prediction; splatted discs reproduce planes exactly (docs/tuning.md#fusion).
+// Ghost removal is natural with surfels: each frame, every surfel that projects in front of the
+// measured depth (the camera sees through it) gets a free-space vote, and one at the depth of a
+// pixel weighted as dynamic a dynamic vote; a surfel with more votes than support is removed.
+// Surfels that never become stable (confidence below stable_confidence within
+// unstable_window_frames) are removed too. A background that was occluded gets new surfels as
+// soon as it is seen with weight.
 // A triangle mesh is made at export time by integrating the model's own predictions at the stored
 // keyframe poses into an Open3D ScalableTSDFVolume (CPU), so the mesh holds only static surfels.
 #include <nlohmann/json.hpp>
@@ -137,8 +126,8 @@ class StaticMap {
   ModelPrediction predict(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
 
   // predict()'s depth alone for tracking targets, each surfel splatted as a small square inside its
-  // disc's image with its plane's depth instead of as a ray-traced disc: 6.8 against 17 ms at
-  // 320x240 (BM_SurfelPredictDepth), no less accurate for tracking (see kInnerSquare). Pixels
+  // disc's image with its plane's depth instead of as a ray-traced disc: well under half predict()'s
+  // time and no less accurate for tracking (see kInnerSquare; docs/tuning.md#predict_depth). Pixels
   // between the squares may stay empty (0).
   cv::Mat predictDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const;
 
