@@ -1,8 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "testing/test_util.h"
 
 namespace ff {
 namespace {
@@ -48,6 +51,67 @@ TEST(Config, MergeChecksKeysAndTypes) {
   EXPECT_EQ(base["a"]["n"], 7);
   EXPECT_THROW(applyOverride(base, "a.q=1"), InputError);
   EXPECT_THROW(applyOverride(base, "novalue"), InputError);
+}
+
+TEST(Camera, ValuesOutOfRangeAreRefusedByName) {
+  const auto messageOf = [](const std::string& spec) {
+    try {
+      parseCameraModel(spec);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(messageOf("500,500,1e300,240").find("principal point"), std::string::npos);
+  EXPECT_NE(messageOf("1e-300,500,320,240").find("focal lengths"), std::string::npos);
+  EXPECT_NE(messageOf("500,500,320,240,1e300,480").find("image size"), std::string::npos);
+  EXPECT_NE(messageOf("500,500,320,240,640.5,480").find("image size"), std::string::npos);
+  EXPECT_NE(messageOf("500,500,320,240,640,480,1e9,0,0,0,0").find("distortion"), std::string::npos);
+  EXPECT_EQ(messageOf("50,50,31.5,23.5,64,48"), "accepted");
+  EXPECT_EQ(messageOf("fr1"), "accepted");
+}
+
+struct WrapConfig {
+  int count = 3;
+  uint64_t seed = 1;
+  float gain = 0.5f;
+  struct Inner {
+    int levels = 4;
+  } inner;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WrapConfig::Inner, levels)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(WrapConfig, count, seed, gain, inner)
+
+std::string resolveError(const std::vector<std::string>& overrides, const std::string& file = "") {
+  try {
+    resolveConfig(WrapConfig{}, file, overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(Config, IntegersDoNotWrapAround) {
+  EXPECT_EQ(resolveConfig(WrapConfig{}, "", {"inner.levels=6", "gain=0.1"}).inner.levels, 6);
+  EXPECT_EQ(resolveConfig(WrapConfig{}, "", {"seed=18446744073709551615"}).seed, 18446744073709551615ull);
+  const std::string wrapped = resolveError({"inner.levels=4294967300"});
+  EXPECT_NE(wrapped.find("'inner.levels'"), std::string::npos) << wrapped;
+  EXPECT_NE(wrapped.find("out of range"), std::string::npos) << wrapped;
+  EXPECT_NE(resolveError({"count=2147483648"}).find("'count'"), std::string::npos);
+  EXPECT_NE(resolveError({"count=-2147483649"}).find("'count'"), std::string::npos);
+  EXPECT_NE(resolveError({"seed=-1"}).find("'seed'"), std::string::npos);
+  EXPECT_NE(resolveError({"gain=1e300"}).find("'gain'"), std::string::npos);
+  EXPECT_EQ(resolveError({"count=-5", "gain=-1e30"}), "accepted");  // in range; the stage checks its rules
+}
+
+TEST(Config, FolderOrGarbageAsConfigFileIsNamed) {
+  testing::TempDir tmp;
+  const std::string folder = resolveError({}, tmp.str());
+  EXPECT_NE(folder.find(tmp.str() + ": is a folder"), std::string::npos) << folder;
+  const std::string long_key = "x" + std::string(10000, 'y') + "=1";
+  const std::string msg = resolveError({long_key});
+  EXPECT_LT(msg.size(), 300u) << msg;
+  EXPECT_NE(msg.find("(10003 characters)"), std::string::npos) << msg;
 }
 
 }  // namespace

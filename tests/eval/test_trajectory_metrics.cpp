@@ -176,6 +176,29 @@ TEST(Rpe, NoOverlapOrTooShortIsInputError) {
   EXPECT_THROW(computeRpe(gt, gt, -1.0), InputError);
 }
 
+TEST(Rpe, DeltaBeyondTheEstimateOrNotFiniteIsInputError) {
+  const auto gt = wobblyTrajectory(100, 0.03, 1000);  // 2.97 s
+  try {
+    computeRpe(gt, gt, 1e300, "gt.txt", "est.txt");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--delta: 1e+300 s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not shorter than est.txt (2.970000 s"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(computeRpe(gt, gt, std::nan("")), InputError);
+  EXPECT_THROW(computeRpe(gt, gt, INFINITY), InputError);
+  EXPECT_NO_THROW(computeRpe(gt, gt, 2.5));
+}
+
+// Many estimated poses that all map onto few ground-truth poses: the overlap test counts the
+// distinct round trips with flags (it searched a growing list, quadratic in the poses).
+TEST(Rpe, DenseEstimateOverSparseGroundTruth) {
+  const auto gt = wobblyTrajectory(50, 0.2, 1000);
+  const auto est = wobblyTrajectory(20000, 0.0005, 1000);
+  const auto r = computeRpe(gt, est, 1.0);
+  EXPECT_GT(r.pairs, 15000u);
+}
+
 TEST(Rpe, EstimateAtDifferentRateUsesClosestGroundTruth) {
   const auto gt = wobblyTrajectory(1001, 0.01);  // 100 Hz ground truth, like the TUM mocap
   Trajectory est;

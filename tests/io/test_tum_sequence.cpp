@@ -218,7 +218,9 @@ TEST(TumSequence, BadCameraFile) {
   writeText(f.root / "camera.txt", "# fx fy cx cy w h\n50 51 31.5\n");
   expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:2", "fx fy cx cy width height", "50 51 31.5"});
   writeText(f.root / "camera.txt", "0 51 31.5 23.5 64 48\n");
-  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "positive"});
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "focal lengths"});
+  writeText(f.root / "camera.txt", "50 51 1e300 23.5 64 48\n");
+  expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt:1", "principal point"});
   writeText(f.root / "camera.txt", "# nothing\n");
   expectInputError([&] { TumSequence::open(f.str()); }, {"camera.txt", "no intrinsics"});
   writeText(f.root / "camera.txt", "50 51 31.5 23.5 64 48 0.1 0.2\n");

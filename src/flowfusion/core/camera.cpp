@@ -61,6 +61,21 @@ CameraModel cameraModelFromValues(const std::vector<double>& v) {
   return m;
 }
 
+std::optional<std::string> cameraValuesProblem(const std::vector<double>& v) {
+  for (double x : v)
+    if (!std::isfinite(x)) return "a value is not finite";
+  const double width = v.size() >= 6 ? v[4] : 640, height = v.size() >= 6 ? v[5] : 480;
+  for (double side : {width, height})
+    if (!(side >= 1 && side <= 100000) || side != std::floor(side))
+      return "the image size must be whole numbers of 1 to 100000 pixels";
+  if (!(v[0] >= 1 && v[0] <= 1e6 && v[1] >= 1 && v[1] <= 1e6)) return "focal lengths must be 1 to 1e6 pixels";
+  if (!(std::abs(v[2] - width / 2) <= 1.5 * width && std::abs(v[3] - height / 2) <= 1.5 * height))
+    return "the principal point must lie within one image size of the image";
+  for (size_t k = 6; k < v.size(); ++k)
+    if (std::abs(v[k]) > 1000) return "distortion coefficients must lie within +-1000";
+  return std::nullopt;
+}
+
 CameraIntrinsics parseCamera(const std::string& spec, const std::string& what) {
   return parseCameraModel(spec, what).intrinsics;
 }
@@ -81,15 +96,14 @@ CameraModel parseCameraModel(const std::string& spec_in, const std::string& what
       v.push_back(std::stod(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw InputError(what + ": '" + spec_in + expected);
+      throw InputError(what + ": '" + quoteForMessage(spec_in) + expected);
     }
   }
-  if (v.size() != 4 && v.size() != 6 && v.size() != 11) throw InputError(what + ": '" + spec_in + expected);
-  for (double x : v)
-    if (!std::isfinite(x)) throw InputError(what + ": '" + spec_in + "' holds a value that is not finite");
-  const CameraModel m = cameraModelFromValues(v);
-  if (!m.intrinsics.valid()) throw InputError(what + ": '" + spec_in + "' has a non-positive focal length or size");
-  return m;
+  if (v.size() != 4 && v.size() != 6 && v.size() != 11)
+    throw InputError(what + ": '" + quoteForMessage(spec_in) + expected);
+  if (const auto problem = cameraValuesProblem(v))
+    throw InputError(what + ": '" + quoteForMessage(spec_in) + "': " + *problem);
+  return cameraModelFromValues(v);
 }
 
 }  // namespace ff

@@ -49,9 +49,13 @@ struct CameraModel {
 // `what` on anything else.
 CameraModel parseCameraModel(const std::string& spec, const std::string& what = "--camera");
 // The model from fx, fy, cx, cy[, width, height[, k1, k2, p1, p2, k3]] (640x480 when the size is
-// left out); the caller checks the values. Throws std::invalid_argument (a programming mistake)
-// on any other count.
+// left out); the caller checks the values with cameraValuesProblem first. Throws
+// std::invalid_argument (a programming mistake) on any other count.
 CameraModel cameraModelFromValues(const std::vector<double>& values);
+// What is wrong with such values, or nullopt when they are usable: focal lengths 1..1e6 pixels,
+// a size of 1..100000 pixels a side (whole numbers), the principal point within one image size
+// of the image, distortion coefficients within +-1000, everything finite.
+std::optional<std::string> cameraValuesProblem(const std::vector<double>& values);
 CameraIntrinsics parseCamera(const std::string& spec, const std::string& what = "--camera");
 std::optional<CameraIntrinsics> freiburgPreset(int n);
 // The benchmark's published coefficients of the colour camera (the depth images are registered

@@ -21,14 +21,21 @@ void applyOverride(nlohmann::json& base, const std::string& assignment);
 nlohmann::json readJsonFile(const std::string& path);
 void writeJsonFile(const std::string& path, const nlohmann::json& j);
 
+// Checks that converting the merged JSON `given` to the config struct kept every number: an
+// integer that does not fit its field (4294967300 for an int, -1 for an unsigned) or a float
+// beyond a float field's range is an InputError naming the setting.
+void checkConverted(const nlohmann::json& given, const nlohmann::json& converted);
+
 // Defaults -> file (if non-empty) -> overrides, then converted back to T. Conversion errors
-// (e.g. a negative count) are reported as InputError.
+// (a value that does not fit its field's type) are reported as InputError.
 template <typename T>
 T resolveConfig(const T& defaults, const std::string& file, const std::vector<std::string>& overrides) {
   nlohmann::json j = defaults;
   if (!file.empty()) mergeConfig(j, readJsonFile(file), file);
   for (const auto& o : overrides) applyOverride(j, o);
-  return j.get<T>();
+  T result = j.get<T>();
+  checkConverted(j, nlohmann::json(result));
+  return result;
 }
 
 }  // namespace ff

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/image_file.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 
 namespace ff::eval {
@@ -43,7 +44,7 @@ MaskFiles listMasks(const std::string& dir) {
 }
 
 cv::Mat readMask(const std::string& path) {
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const cv::Mat raw = readImageFile(path, cv::IMREAD_UNCHANGED, "mask image");
   if (raw.empty()) throw InputError(path + ": cannot read mask image");
   if (raw.depth() != CV_8U)
     throw InputError(path + ": mask must be an 8-bit image (255 = dynamic, 0 = static)");

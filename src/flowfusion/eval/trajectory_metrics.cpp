@@ -20,6 +20,13 @@ std::string fmt(double v) {
   return buf;
 }
 
+// %g: short also for 1e300.
+std::string fmtShort(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
 std::vector<double> stampsOf(const Trajectory& t) {
   std::vector<double> s;
   s.reserve(t.size());
@@ -96,7 +103,7 @@ void to_json(nlohmann::json& j, const RpeResult& r) {
 
 AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s, const std::string& gt_name,
                      const std::string& est_name) {
-  if (!(max_diff_s > 0)) throw InputError("--max-diff: must be positive, got " + fmt(max_diff_s));
+  if (!(max_diff_s > 0)) throw InputError("--max-diff: must be positive, got " + fmtShort(max_diff_s));
   const auto matches = associateStamps(stampsOf(gt), stampsOf(est), max_diff_s);
   if (matches.size() < 3)
     throw InputError(gt_name + " vs " + est_name + ": only " + std::to_string(matches.size()) +
@@ -131,20 +138,28 @@ AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_dif
 
 RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s, const std::string& gt_name,
                      const std::string& est_name) {
-  if (!(delta_s > 0)) throw InputError("--delta: must be positive, got " + fmt(delta_s));
+  if (!(delta_s > 0) || !std::isfinite(delta_s))
+    throw InputError("--delta: must be a positive number of seconds, got " + fmtShort(delta_s));
   if (gt.size() < 2) throw InputError(gt_name + ": at least 2 ground-truth poses are needed for RPE");
   if (est.size() < 2) throw InputError(est_name + ": at least 2 estimated poses are needed for RPE");
+  const double span_s = est.back().timestamp - est.front().timestamp;
+  if (delta_s >= span_s)
+    throw InputError("--delta: " + fmtShort(delta_s) + " s is not shorter than " + est_name + " (" + fmt(span_s) +
+                     " s from its first to its last pose)");
   const auto stamps_gt = stampsOf(gt);
   const auto stamps_est = stampsOf(est);
 
   // The script's overlap test: estimated stamps that survive a round trip to the closest GT stamp
   // and back; without overlap in time they all collapse onto one end.
-  std::vector<size_t> round_trip;
+  // Each lookup is a binary search and distinct targets are counted with flags: O(n log n).
+  std::vector<char> reached(stamps_est.size(), 0);
+  size_t round_trip = 0;
   for (double t : stamps_est) {
     const size_t k = closestIndex(stamps_est, stamps_gt[closestIndex(stamps_gt, t)]);
-    if (std::find(round_trip.begin(), round_trip.end(), k) == round_trip.end()) round_trip.push_back(k);
+    round_trip += !reached[k];
+    reached[k] = 1;
   }
-  if (round_trip.size() < 2)
+  if (round_trip < 2)
     throw InputError(gt_name + " vs " + est_name +
                      ": the trajectories do not overlap in time (did you pass the right files?)");
 

@@ -53,8 +53,9 @@ AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_dif
 // closest to t_i + delta_s (pairs with j = the last pose are skipped, as the script does); each
 // stamp is matched with the closest GT stamp, and pairs whose GT stamps are more than twice the
 // median GT interval away are dropped. Error E = (inv(E_j) E_i)^-1 (inv(G_j) G_i): translation
-// norm and rotation angle. InputError naming the files when the trajectories do not overlap in
-// time or fewer than 2 pairs remain.
+// norm and rotation angle. O(n log n): every closest stamp is a binary search. InputError naming
+// the files when delta_s is not positive, finite and shorter than the estimate, when the
+// trajectories do not overlap in time, or when fewer than 2 pairs remain.
 RpeResult computeRpe(const Trajectory& gt, const Trajectory& est, double delta_s = 1.0,
                      const std::string& gt_name = "ground truth", const std::string& est_name = "estimate");
 

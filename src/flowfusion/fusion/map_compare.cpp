@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #include "flowfusion/core/error.h"
 
@@ -19,6 +22,55 @@ open3d::geometry::PointCloud toCloud(const std::vector<Eigen::Vector3f>& points)
   cloud.points_.reserve(points.size());
   for (const auto& p : points) cloud.points_.push_back(p.cast<double>());
   return cloud;
+}
+
+// Bytes of one value of a PLY property type (0 for an unknown type).
+size_t plyTypeBytes(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+      type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+// A PLY file's header must not promise more elements than its body can hold: Open3D allocates
+// what the header declares before reading (2e9 vertices: std::bad_alloc). Each element needs at
+// least its fixed-size properties' bytes (binary) or two characters per property (ASCII).
+void checkPlyHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || (line != "ply" && line != "ply\r")) return;  // not PLY: Open3D decides
+  bool ascii = false;
+  long double needed = 0, count = 0, per_element = 0;
+  for (int lines = 0; std::getline(in, line) && lines < 10000; ++lines) {
+    std::istringstream words(line);
+    std::string word, type;
+    words >> word;
+    if (word == "format") {
+      words >> type;
+      ascii = type == "ascii";
+    } else if (word == "element") {
+      needed += count * per_element;
+      count = 0;
+      per_element = 0;
+      words >> type >> count;
+    } else if (word == "property") {
+      words >> type;
+      per_element += ascii ? 2 : (type == "list" ? 1 : plyTypeBytes(type));
+    } else if (word == "end_header") {
+      needed += count * per_element;
+      std::error_code ec;
+      const auto size = std::filesystem::file_size(path, ec);
+      const auto body = static_cast<long double>(ec ? 0 : size) - static_cast<long double>(in.tellg());
+      if (needed > body)
+        throw InputError(path + ": PLY header declares more elements than the file holds (" +
+                         std::to_string(static_cast<long long>(body)) +
+                         " bytes after the header; corrupt or cut short?)");
+      return;
+    }
+  }
 }
 
 }  // namespace
@@ -63,6 +115,7 @@ std::vector<Eigen::Vector3f> readMapPoints(const std::string& path) {
   if (!fs::exists(path, ec)) throw InputError(path + ": point cloud file does not exist");
   if (!fs::is_regular_file(path, ec)) throw InputError(path + ": not a point cloud file");
 
+  checkPlyHeader(path);
   open3d::geometry::PointCloud cloud;
   {
     // Open3D warns on stdout about files it cannot parse; the InputError below says it instead.

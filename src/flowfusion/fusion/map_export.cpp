@@ -7,6 +7,7 @@
 #include <open3d/io/TriangleMeshIO.h>
 #include <open3d/pipelines/integration/ScalableTSDFVolume.h>
 
+#include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/fusion/static_map.h"
 
@@ -28,7 +29,15 @@ void StaticMap::exportPointCloud(const std::string& path) const {
     cloud.normals_.push_back(pts.normals[k].cast<double>());
     cloud.colors_.push_back(rgbFromBgr(pts.colors[k]));
   }
-  if (!open3d::io::WritePointCloud(path, cloud)) throw InputError("cannot write point cloud '" + path + "'");
+  // Open3D does not check its own writes: the file must read back whole before it is renamed.
+  writeThroughTempPath(
+      path,
+      [&](const std::string& temp) {
+        open3d::geometry::PointCloud back;
+        return open3d::io::WritePointCloud(temp, cloud) && open3d::io::ReadPointCloud(temp, back) &&
+               back.points_.size() == cloud.points_.size();
+      },
+      "point cloud");
 }
 
 void StaticMap::exportMesh(const std::string& path) const {
@@ -62,7 +71,14 @@ void StaticMap::exportMesh(const std::string& path) const {
   }
   const auto mesh = volume.ExtractTriangleMesh();
   if (mesh->triangles_.empty()) throw InputError("cannot write mesh '" + path + "': the map gave no triangles");
-  if (!open3d::io::WriteTriangleMesh(path, *mesh)) throw InputError("cannot write mesh '" + path + "'");
+  writeThroughTempPath(
+      path,
+      [&](const std::string& temp) {
+        open3d::geometry::TriangleMesh back;
+        return open3d::io::WriteTriangleMesh(temp, *mesh) && open3d::io::ReadTriangleMesh(temp, back) &&
+               back.vertices_.size() == mesh->vertices_.size() && back.triangles_.size() == mesh->triangles_.size();
+      },
+      "mesh");
 }
 
 }  // namespace ff

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -117,6 +118,10 @@ void squareSplat(const Surfel& s, const CameraView& view, int w, int h, float ma
 // (one noisy synthetic 640x480 frame fused and predicted at its pose: median depth difference
 // -8 mm for the front surfel, 0.0 mm for the mean; frame-to-model ATE on the static synthetic
 // twin of seed 2: 31 mm before, 3.6 mm after).
+// The sums are fixed-point integers (weights and weighted depths in units of 2^-24): integer
+// addition does not depend on the order, so the result is the same bit for bit whatever the
+// threads and their scheduling (per-thread float sums made runs differ in the last bits, and
+// hard sequences then diverged).
 template <class Splat>
 std::vector<float> averagedDepth(const std::vector<Surfel>& surfels, const std::vector<uint64_t>& zbuffer,
                                  const CameraView& view, int w, float band, Splat&& splat) {
@@ -127,23 +132,33 @@ std::vector<float> averagedDepth(const std::vector<Surfel>& surfels, const std::
       if (zbuffer[p] != kEmpty)
         front[p] = view.planeDepth(surfels[keyIndex(zbuffer[p])], static_cast<int>(p % w), static_cast<int>(p / w));
   });
-  tbb::enumerable_thread_specific<std::vector<Eigen::Vector2f>> sums(
-      [pixels] { return std::vector<Eigen::Vector2f>(pixels, Eigen::Vector2f::Zero()); });
+  // Weight <= 10 and depth clamped to 1e4 m: a term is below 2^41, a pixel's sum of up to 2^20
+  // terms fits an int64.
+  constexpr double kScale = 1 << 24;
+  constexpr float kMaxSummedDepth = 1e4f;
+  using Sum = std::array<int64_t, 2>;  // sum of weights, sum of weight * depth
+  tbb::enumerable_thread_specific<std::vector<Sum>> sums([pixels] { return std::vector<Sum>(pixels, Sum{0, 0}); });
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surfels.size()), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<Eigen::Vector2f>& sum = sums.local();
+    std::vector<Sum>& sum = sums.local();
     for (size_t k = r.begin(); k < r.end(); ++k) {
-      const float weight = std::min(surfels[k].confidence, 10.0f);
+      const double weight = std::min(surfels[k].confidence, 10.0f);
+      const int64_t weight_fixed = std::llround(weight * kScale);
       splat(k, [&](size_t pixel, float z) {
-        if (std::abs(z - front[pixel]) < band * std::max(1.0f, front[pixel]))
-          sum[pixel] += Eigen::Vector2f(weight, weight * z);
+        if (std::abs(z - front[pixel]) < band * std::max(1.0f, front[pixel])) {
+          sum[pixel][0] += weight_fixed;
+          sum[pixel][1] += std::llround(weight * std::min(z, kMaxSummedDepth) * kScale);
+        }
       });
     }
   });
-  std::vector<Eigen::Vector2f> total(pixels, Eigen::Vector2f::Zero());
+  std::vector<Sum> total(pixels, Sum{0, 0});
   for (const auto& sum : sums)
-    for (size_t p = 0; p < pixels; ++p) total[p] += sum[p];
+    for (size_t p = 0; p < pixels; ++p) {
+      total[p][0] += sum[p][0];
+      total[p][1] += sum[p][1];
+    }
   for (size_t p = 0; p < pixels; ++p)
-    if (total[p].x() > 0) front[p] = total[p].y() / total[p].x();
+    if (total[p][0] > 0) front[p] = static_cast<float>(static_cast<double>(total[p][1]) / total[p][0]);
   return front;
 }
 

@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
+#include <sstream>
 
+#include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/tum_text.h"
 
@@ -28,8 +29,7 @@ Trajectory readTrajectory(const std::string& path) {
 }
 
 void writeTrajectory(const std::string& path, const Trajectory& traj) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path + ": cannot write trajectory file");
+  std::ostringstream out;
   out << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
   out << std::fixed;
   for (const auto& p : traj) {
@@ -38,7 +38,7 @@ void writeTrajectory(const std::string& path, const Trajectory& traj) {
     out << std::setprecision(6) << p.timestamp << ' ' << std::setprecision(7) << t.x() << ' ' << t.y() << ' '
         << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
   }
-  if (!out) throw InputError(path + ": error while writing trajectory file");
+  writeFileAtomic(path, out.str(), "trajectory file");
 }
 
 bool interpolatePose(const Trajectory& traj, double t, SE3& out, double max_gap) {

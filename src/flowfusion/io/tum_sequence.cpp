@@ -3,13 +3,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
 #include <sstream>
 
+#include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/image_file.h"
 #include "flowfusion/io/tum_text.h"
 
 namespace fs = std::filesystem;
@@ -45,19 +46,16 @@ CameraModel readCameraFile(const std::string& path) {
   std::vector<double> v;
   for (double x; nums >> x;) v.push_back(x);
   if (!nums.eof() || (v.size() != 6 && v.size() != 11)) in.malformed();
-  for (double x : v)
-    if (!std::isfinite(x)) in.malformed();
-  const CameraModel m = cameraModelFromValues(v);
-  if (!m.intrinsics.valid()) in.fail("focal lengths and image size must be positive");
-  return m;
+  if (const auto problem = cameraValuesProblem(v)) in.fail(*problem);
+  return cameraModelFromValues(v);
 }
 
 void writeCameraFile(const std::string& path, const CameraIntrinsics& c) {
-  std::ofstream out(path);
+  std::ostringstream out;
   out << "# fx fy cx cy width height (pixels)\n";
   out.precision(10);
   out << c.fx << ' ' << c.fy << ' ' << c.cx << ' ' << c.cy << ' ' << c.width << ' ' << c.height << '\n';
-  if (!out) throw InputError(path + ": cannot write camera file");
+  writeFileAtomic(path, out.str(), "camera file");
 }
 
 TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& options) {
@@ -109,13 +107,14 @@ std::optional<std::string> TumSequence::masksDir() const {
 
 RgbdFrame TumSequence::load(size_t i) const {
   const FrameEntry& e = entries_.at(i);
-  cv::Mat color = cv::imread(e.rgb_path, cv::IMREAD_UNCHANGED);
+  const cv::Size size(camera_.intrinsics.width, camera_.intrinsics.height);
+  cv::Mat color = readImageFile(e.rgb_path, cv::IMREAD_UNCHANGED, "colour image", size);
   if (color.empty()) throw InputError(e.rgb_path + ": missing or unreadable colour image");
   if (color.depth() != CV_8U)
     throw InputError(e.rgb_path + ": colour image must be 8-bit per channel");
   if (color.channels() == 1) cv::cvtColor(color, color, cv::COLOR_GRAY2BGR);
   else if (color.channels() == 4) cv::cvtColor(color, color, cv::COLOR_BGRA2BGR);
-  cv::Mat depth = cv::imread(e.depth_path, cv::IMREAD_UNCHANGED);
+  cv::Mat depth = readImageFile(e.depth_path, cv::IMREAD_UNCHANGED, "depth image", size);
   if (depth.empty()) throw InputError(e.depth_path + ": missing or unreadable depth image");
   if (depth.type() != CV_16UC1)
     throw InputError(e.depth_path + ": depth image must be 16-bit single-channel PNG (got " +
@@ -148,14 +147,14 @@ void TumWriter::add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_
                     const cv::Mat& mask) {
   const std::string name = timestampName(timestamp) + ".png";
   const fs::path root(dir_);
-  if (!cv::imwrite((root / "rgb" / name).string(), bgr8)) throw InputError(dir_ + ": cannot write rgb/" + name);
+  writePngAtomic((root / "rgb" / name).string(), bgr8, "colour image");
   cv::Mat d16;
   depth_m.convertTo(d16, CV_16U, depth_scale_);
-  if (!cv::imwrite((root / "depth" / name).string(), d16)) throw InputError(dir_ + ": cannot write depth/" + name);
+  writePngAtomic((root / "depth" / name).string(), d16, "depth image");
   if (!mask.empty()) {
     if (!masks_) fs::create_directories(root / "masks");
     masks_ = true;
-    if (!cv::imwrite((root / "masks" / name).string(), mask)) throw InputError(dir_ + ": cannot write masks/" + name);
+    writePngAtomic((root / "masks" / name).string(), mask, "mask");
   }
   rgb_.emplace_back(timestamp, "rgb/" + name);
   depth_.emplace_back(timestamp, "depth/" + name);
@@ -166,10 +165,10 @@ void TumWriter::finish(const std::string& source_comment) {
   const fs::path root(dir_);
   const auto writeList = [&](const std::string& file, const std::string& what,
                              const std::vector<std::pair<double, std::string>>& list) {
-    std::ofstream out(root / file);
+    std::ostringstream out;
     out << "# " << what << "\n# " << source_comment << "\n# timestamp filename\n";
     for (const auto& [t, f] : list) out << timestampName(t) << ' ' << f << '\n';
-    if (!out) throw InputError((root / file).string() + ": cannot write");
+    writeFileAtomic((root / file).string(), out.str(), "file list");
   };
   writeList("rgb.txt", "color images", rgb_);
   writeList("depth.txt", "depth maps", depth_);

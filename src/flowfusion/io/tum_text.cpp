@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <tuple>
 
 #include "flowfusion/core/error.h"
@@ -9,7 +11,10 @@
 namespace ff {
 
 RecordReader::RecordReader(std::string path, const std::string& what, std::string format)
-    : path_(std::move(path)), format_(std::move(format)), in_(path_) {
+    : path_(std::move(path)), format_(std::move(format)) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path_, ec)) throw InputError(path_ + ": is a folder, not a " + what);
+  in_.open(path_);
   if (!in_) throw InputError(path_ + ": cannot open " + what);
 }
 
@@ -28,6 +33,11 @@ bool RecordReader::next() {
 double RecordReader::timestamp() {
   double t;
   if (!(fields_ >> t) || !std::isfinite(t)) malformed();
+  if (std::abs(t) >= kMaxTimestampS) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", t);
+    fail("timestamp " + std::string(buf) + " s is out of range (expected seconds below 1e10, e.g. Unix time)");
+  }
   if (previous_ && t <= *previous_)
     fail("timestamp " + std::to_string(t) +
          (t == *previous_ ? " is a duplicate" : " is earlier than the previous line") +
@@ -36,7 +46,7 @@ double RecordReader::timestamp() {
   return t;
 }
 
-void RecordReader::malformed() const { fail("expected '" + format_ + "', got '" + line_ + "'"); }
+void RecordReader::malformed() const { fail("expected '" + format_ + "', got '" + quoteForMessage(line_) + "'"); }
 
 void RecordReader::fail(const std::string& message) const {
   throw InputError(read_all_ ? path_ + ": " + message : path_ + ":" + std::to_string(lineno_) + ": " + message);

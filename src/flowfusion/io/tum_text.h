@@ -10,6 +10,10 @@
 
 namespace ff {
 
+// Timestamps are seconds below this in magnitude (Unix time until the year 2286): larger ones
+// would lose their microseconds in "%.6f" file names and trajectories.
+inline constexpr double kMaxTimestampS = 1e10;
+
 // Reads records one line at a time, skipping blank and '#' lines. Every error is an InputError
 // naming the file and the line at fault, so that a user can fix the file.
 class RecordReader {
@@ -23,7 +27,8 @@ class RecordReader {
   const std::string& line() const { return line_; }
   // The record's fields not read yet.
   std::istringstream& fields() { return fields_; }
-  // Reads the record's leading timestamp: finite, and later than the previous record's.
+  // Reads the record's leading timestamp: finite, below kMaxTimestampS in magnitude, and later
+  // than the previous record's.
   double timestamp();
 
   // "path:line: expected '<format>', got '<line>'".
