@@ -85,7 +85,7 @@ std::shared_ptr<Body> sitterScript(Rng& rng, const WalkLine& line, const Eigen::
   // back 0.3 m onto the seat's front half.
   const Eigen::Vector2d towards_camera = -line.view;
   const Eigen::Vector2d spot = seat_centre + 0.38 * towards_camera;
-  const double side = rng.sign(), away = rng.uniform(1.0, 1.4);
+  const double side = rng.sign(), away = rng.uniform(0.8, 1.2);
   const FloorPose pose{spot + side * away * line.lateral(), headingOf(-side * line.lateral())};
   auto body = std::make_shared<Body>(dims, pose, t0);
   const double speed = rng.uniform(0.6, 1.2);

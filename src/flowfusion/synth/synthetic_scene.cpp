@@ -350,7 +350,8 @@ std::vector<std::shared_ptr<const Body>> addPeople(SceneModel& m, const SynthCon
     std::shared_ptr<const Body> body;
     if (k < static_cast<int>(seats.size())) {
       line.distance_m = (seats[k].centre - view.eye).dot(view.view) - 0.38;
-      body = sitterScript(rng, line, seats[k].centre, seats[k].height, -rng.uniform(0.0, 1.0), t_end);
+      // Started 2-2.5 s early, so that the first sitting down falls in the first seconds.
+      body = sitterScript(rng, line, seats[k].centre, seats[k].height, -rng.uniform(2.0, 2.5), t_end);
     } else {
       line.distance_m = rng.uniform(1.7, 2.4);
       line.half_m = rng.uniform(1.1, 1.5);
@@ -367,9 +368,9 @@ void addNearObjects(SceneModel& m, const SynthConfig& cfg, const CameraPath& cam
   const double tan_x = 0.5 * K.width / K.fx, tan_y = 0.5 * K.height / K.fy;
   for (int k = 0; k < cfg.near_objects; ++k) {
     MovingObject obj;
-    obj.shape = centred(boxShape(m, rng, 0.55, 0.8));
+    obj.shape = centred(boxShape(m, rng, 0.45, 0.65));
     obj.shape.kind = "near_box";
-    obj.path = crossingPath(rng, cam.T_world_cam(0.0), tan_x, tan_y, 0.9, 1.4, cfg.object_speed);
+    obj.path = crossingPath(rng, cam.T_world_cam(0.0), tan_x, tan_y, 1.0, 1.5, cfg.object_speed);
     m.objects.push_back(std::move(obj));
   }
 }

@@ -57,7 +57,7 @@ struct SynthConfig {
   // before they existed; each draws from its own random stream, so they do not change each other.
   int people = 0;           // articulated people walking across the first view (12 moving objects each)
   int seats = 0;            // seats (static boxes) in the first view; person k < seats sits on seat k
-  int near_objects = 0;     // large boxes (0.55-0.8 m) 0.9-1.4 m in front of the first camera, crossing it
+  int near_objects = 0;     // large boxes (0.45-0.65 m) 1.0-1.5 m in front of the first camera, crossing it
   int pushed_objects = 0;   // chairs and boxes in view that rest, are pushed, rest, are pushed back
   double rest_s = 3.0;      // s, how long pushed objects rest before each push
   CameraMotion camera_motion = CameraMotion::Handheld;
