@@ -36,32 +36,29 @@ ff::synth::AugmentConfig noiseless(int objects = 2) {
   return c;
 }
 
-}  // namespace
-
-TEST(Augment, CompositesObjectsWithDepthTestAndExactMasks) {
-  ff::testing::TempDir tmp;
-  const std::string in = writeStatic(tmp.path() / "static");
-  const std::string out = (tmp.path() / "aug").string();
-  const auto report = ff::synth::augmentSequence(in, out, noiseless());
-  EXPECT_EQ(report.frames_written, 6);
-  EXPECT_TRUE(report.dropped_timestamps.empty());
+// The augmented sequence has the source's poses and timestamps; its mask marks exactly the pixels
+// where the inserted depth replaced the real one (in front of it or where it had none). Returns the
+// number of mask pixels.
+int expectCompositedWithExactMasks(const std::string& in, const std::string& out, size_t frames) {
   const auto src = ff::TumSequence::open(in), dst = ff::TumSequence::open(out);
-  ASSERT_EQ(dst.size(), 6u);
-  ASSERT_TRUE(dst.masksDir());
-  ASSERT_TRUE(dst.groundtruth());
+  EXPECT_EQ(dst.size(), frames);
+  EXPECT_TRUE(dst.masksDir());
+  EXPECT_TRUE(dst.groundtruth());
+  if (dst.size() != frames || !dst.masksDir() || !dst.groundtruth()) return 0;
   EXPECT_TRUE(fs::exists(fs::path(out) / "scene.json"));
   EXPECT_NEAR(dst.camera().fx, src.camera().fx, 1e-9);
   int mask_total = 0;
-  for (size_t i = 0; i < 6; ++i) {
+  for (size_t i = 0; i < frames; ++i) {
     const auto a = src.load(i), b = dst.load(i);
     EXPECT_NEAR(a.timestamp, b.timestamp, 1e-9);
     ff::SE3 Ta, Tb;
-    ASSERT_TRUE(ff::interpolatePose(*src.groundtruth(), a.timestamp, Ta));
-    ASSERT_TRUE(ff::interpolatePose(*dst.groundtruth(), b.timestamp, Tb));
+    EXPECT_TRUE(ff::interpolatePose(*src.groundtruth(), a.timestamp, Ta));
+    EXPECT_TRUE(ff::interpolatePose(*dst.groundtruth(), b.timestamp, Tb));
     EXPECT_LT(ff::translationNorm(Ta.inverse() * Tb), 1e-4);
     const cv::Mat mask =
         cv::imread((fs::path(*dst.masksDir()) / (ff::timestampName(b.timestamp) + ".png")).string(), cv::IMREAD_UNCHANGED);
-    ASSERT_EQ(mask.size(), a.depth.size());
+    EXPECT_EQ(mask.size(), a.depth.size());
+    if (mask.size() != a.depth.size()) return 0;
     mask_total += cv::countNonZero(mask);
     for (int v = 0; v < mask.rows; ++v)
       for (int u = 0; u < mask.cols; ++u) {
@@ -74,7 +71,29 @@ TEST(Augment, CompositesObjectsWithDepthTestAndExactMasks) {
         }
       }
   }
-  EXPECT_GT(mask_total, 500) << "objects are placed in view of the first frames";
+  return mask_total;
+}
+
+}  // namespace
+
+TEST(Augment, CompositesObjectsWithDepthTestAndExactMasks) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  const std::string out = (tmp.path() / "aug").string();
+  const auto report = ff::synth::augmentSequence(in, out, noiseless());
+  EXPECT_EQ(report.frames_written, 6);
+  EXPECT_TRUE(report.dropped_timestamps.empty());
+  EXPECT_GT(expectCompositedWithExactMasks(in, out, 6), 500) << "objects are placed in view of the first frames";
+}
+
+TEST(Augment, PeopleWalkInViewWithExactMasks) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  const std::string out = (tmp.path() / "aug").string();
+  auto config = noiseless(0);
+  config.people = 2;
+  ff::synth::augmentSequence(in, out, config);
+  EXPECT_GT(expectCompositedWithExactMasks(in, out, 6), 500) << "people walk in view of the first frames";
 }
 
 TEST(Augment, DropsFramesWithoutGroundTruthPose) {
