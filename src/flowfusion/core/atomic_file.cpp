@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/output_folder.h"
 
 namespace fs = std::filesystem;
 
@@ -40,6 +41,17 @@ void renameIntoPlace(const std::string& temp, const std::string& path, const std
   }
 }
 
+// Lists the file in the output folder's manifest before it appears under its name, so that an
+// interruption between the two leaves a listed file that does not exist, never the reverse.
+void recordBeforeRename(const std::string& temp, const std::string& path) {
+  try {
+    detail::recordOutputFile(path);
+  } catch (...) {
+    ::unlink(temp.c_str());
+    throw;
+  }
+}
+
 }  // namespace
 
 void writeFileAtomic(const std::string& path, std::string_view bytes, const std::string& what) {
@@ -64,6 +76,7 @@ void writeFileAtomic(const std::string& path, std::string_view bytes, const std:
     ::unlink(temp.c_str());
     fail(path, what, err);
   }
+  recordBeforeRename(temp, path);
   renameIntoPlace(temp, path, what);
 }
 
@@ -100,6 +113,7 @@ void writeThroughTempPath(const std::string& path, const std::function<bool(cons
     if (!ec) reason += " (" + std::to_string(space.available) + " bytes free on its disk)";
     throw InputError(path + ": cannot write " + what + ": " + reason);
   }
+  recordBeforeRename(temp, path);
   renameIntoPlace(temp, path, what);
 }
 

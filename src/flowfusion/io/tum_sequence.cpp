@@ -176,16 +176,4 @@ void TumWriter::finish(const std::string& source_comment) {
   writeCameraFile((root / "camera.txt").string(), camera_);
 }
 
-void prepareOutputDir(const std::string& dir, bool overwrite) {
-  const fs::path p(dir);
-  if (fs::exists(p)) {
-    if (!fs::is_directory(p)) throw InputError(dir + ": output path exists and is not a folder");
-    if (!fs::is_empty(p) && !overwrite)
-      throw InputError(dir + ": output folder is not empty; choose another or pass --overwrite");
-  }
-  std::error_code ec;
-  fs::create_directories(p, ec);
-  if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
-}
-
 }  // namespace ff

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/core/output_folder.h"  // prepareOutputDir, for the writers of sequences
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/undistortion.h"
 #include "flowfusion/io/trajectory_io.h"
@@ -89,10 +90,6 @@ class TumWriter {
   Trajectory gt_;
   bool masks_ = false;
 };
-
-// Makes `dir` ready for results: creates it, or accepts it if empty. A non-empty folder is an
-// InputError unless `overwrite` is set (then its content is kept and files are replaced).
-void prepareOutputDir(const std::string& dir, bool overwrite);
 
 // "%.6f" of a timestamp, the file stem used for every per-frame file.
 std::string timestampName(double t);

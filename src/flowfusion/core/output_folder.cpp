@@ -1,0 +1,130 @@
+#include "flowfusion/core/output_folder.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include "flowfusion/core/atomic_file.h"
+#include "flowfusion/core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace ff {
+
+namespace {
+
+// The folder whose writes are listed, and what its manifest lists already.
+struct Recording {
+  std::mutex mutex;
+  fs::path dir;  // weakly canonical; empty = not recording
+  std::set<std::string> listed;
+};
+
+Recording& recording() {
+  static Recording r;
+  return r;
+}
+
+// `path` relative to `dir` when it lies strictly inside it (both weakly canonical), else "".
+std::string relativeInside(const fs::path& dir, const fs::path& path) {
+  auto d = dir.begin();
+  auto p = path.begin();
+  for (; d != dir.end(); ++d, ++p)
+    if (p == path.end() || *d != *p) return "";
+  fs::path rel;
+  for (; p != path.end(); ++p) rel /= *p;
+  return rel.string();
+}
+
+bool sameOrInside(const fs::path& inner, const fs::path& outer) {
+  return inner == outer || !relativeInside(outer, inner).empty();
+}
+
+void appendLine(const fs::path& file, const std::string& line) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
+  const std::string text = line + '\n';
+  const bool ok = fd >= 0 && ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  const int err = errno;
+  if (fd >= 0 && ::close(fd) != 0 && ok) throw InputError(file.string() + ": cannot write: " + std::strerror(errno));
+  if (!ok) throw InputError(file.string() + ": cannot write: " + std::strerror(err));
+}
+
+// Removes the files the manifest lists (regular files inside dir only), then the folders that
+// held them when they are left empty, then the manifest.
+void removeListedFiles(const fs::path& dir) {
+  const fs::path manifest = dir / kManifestName;
+  std::ifstream in(manifest);
+  std::set<fs::path> parents;
+  std::error_code ec;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const fs::path rel = fs::path(line).lexically_normal();
+    if (rel.is_absolute() || rel.empty() || *rel.begin() == "..") continue;  // not ours to touch
+    const fs::path file = dir / rel;
+    if (!fs::is_regular_file(fs::symlink_status(file, ec))) continue;
+    if (!fs::remove(file, ec) && ec)
+      throw InputError(file.string() + ": cannot remove the previous run's file: " + ec.message());
+    for (fs::path p = file.parent_path(); p != dir && !relativeInside(dir, p).empty(); p = p.parent_path())
+      parents.insert(p);
+  }
+  // Deepest first, so that a folder emptied by removing its subfolders goes too.
+  for (auto it = parents.rbegin(); it != parents.rend(); ++it)
+    if (fs::is_directory(*it, ec) && fs::is_empty(*it, ec)) fs::remove(*it, ec);
+  fs::remove(manifest, ec);
+}
+
+}  // namespace
+
+void prepareOutputDir(const std::string& dir, bool overwrite) {
+  if (dir.empty()) throw InputError("the output folder name is empty");
+  const fs::path p(dir);
+  std::error_code ec;
+  if (fs::exists(p, ec)) {
+    if (!fs::is_directory(p, ec)) throw InputError(dir + ": output path exists and is not a folder");
+    if (!fs::is_empty(p, ec)) {
+      if (!overwrite) throw InputError(dir + ": output folder is not empty; choose another or pass --overwrite");
+      removeListedFiles(p);
+    }
+  }
+  fs::create_directories(p, ec);
+  if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
+  writeFileAtomic((p / kManifestName).string(),
+                  "# Files flowfusion wrote into this folder; --overwrite removes exactly these.\n", "manifest");
+  Recording& r = recording();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  r.dir = fs::weakly_canonical(p);
+  r.listed.clear();
+}
+
+void refuseOverlap(const std::string& out_dir, const std::string& input, const std::string& what) {
+  const fs::path out = fs::weakly_canonical(out_dir), in = fs::weakly_canonical(input);
+  std::string relation;
+  if (out == in) relation = " is ";
+  else if (sameOrInside(in, out)) relation = " contains ";
+  else if (sameOrInside(out, in)) relation = " lies inside ";
+  else return;
+  throw InputError(out_dir + relation + what + " (" + input +
+                   "); results never go into an input, even with --overwrite: choose another output folder");
+}
+
+namespace detail {
+
+void recordOutputFile(const std::string& path) {
+  Recording& r = recording();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.dir.empty()) return;
+  const std::string rel = relativeInside(r.dir, fs::weakly_canonical(path));
+  if (rel.empty() || rel == kManifestName || !r.listed.insert(rel).second) return;
+  appendLine(r.dir / kManifestName, rel);
+}
+
+}  // namespace detail
+
+}  // namespace ff

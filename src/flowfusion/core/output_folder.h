@@ -1,0 +1,30 @@
+#pragma once
+// Output folders that never touch the user's data: an output folder may not be, contain or lie
+// inside an input, and --overwrite removes exactly the files a previous flowfusion command wrote
+// there, as listed in the folder's manifest (.flowfusion-manifest, one relative path per line,
+// appended as each file is written through core/atomic_file.h, so an interrupted command's files
+// are listed too), and nothing else.
+#include <string>
+
+namespace ff {
+
+inline constexpr const char* kManifestName = ".flowfusion-manifest";
+
+// Makes `dir` ready for results and starts listing the files written under it in its manifest.
+// A missing folder is created; an empty one is accepted; a non-empty one is an InputError unless
+// `overwrite` is set, and then the files its manifest lists are removed (with folders they leave
+// empty) while everything else stays (a folder without a manifest keeps all its files; those the
+// command writes again are replaced).
+void prepareOutputDir(const std::string& dir, bool overwrite);
+
+// InputError when the output folder is, contains or lies inside `input` (a folder or a file;
+// `what` names it, e.g. "the input sequence"), compared after resolving links, "." and "..".
+void refuseOverlap(const std::string& out_dir, const std::string& input, const std::string& what);
+
+namespace detail {
+// Called by the atomic writer before a file is renamed into place: lists `path` in the manifest
+// of the folder prepareOutputDir prepared last, when it lies inside that folder.
+void recordOutputFile(const std::string& path);
+}  // namespace detail
+
+}  // namespace ff

@@ -1,0 +1,89 @@
+// Output folders: --overwrite removes exactly what an earlier command wrote (its manifest) and
+// nothing of the user's; an output that is, contains or lies inside an input is refused.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "flowfusion/core/atomic_file.h"
+#include "flowfusion/core/error.h"
+#include "flowfusion/core/output_folder.h"
+#include "testing/test_util.h"
+
+namespace fs = std::filesystem;
+
+namespace ff {
+namespace {
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no InputError";
+}
+
+TEST(OutputFolder, OverwriteRemovesExactlyTheListedFiles) {
+  testing::TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  prepareOutputDir(out.string(), false);
+  fs::create_directories(out / "masks");
+  fs::create_directories(out / "preview");
+  for (const char* name : {"trajectory.txt", "masks/1.000000.png", "masks/2.000000.png", "preview/preview_0.png"})
+    writeFileAtomic((out / name).string(), "ours");
+  writeFileAtomic((out / "trajectory.txt").string(), "ours again");  // listed once
+  std::ofstream(out / "notes.txt") << "the user's";
+  std::ofstream(out / "masks" / "hand_made.png") << "the user's";
+  std::ofstream(tmp.path() / "outside.txt") << "the user's";
+  std::ofstream(out / kManifestName, std::ios::app) << "../outside.txt\n"
+                                                    << (tmp.path() / "outside.txt").string() << "\n";
+
+  EXPECT_NE(errorOf([&] { prepareOutputDir(out.string(), false); }).find("--overwrite"), std::string::npos);
+  prepareOutputDir(out.string(), true);
+  EXPECT_FALSE(fs::exists(out / "trajectory.txt"));
+  EXPECT_FALSE(fs::exists(out / "masks" / "1.000000.png"));
+  EXPECT_FALSE(fs::exists(out / "preview"));  // emptied, so removed
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+  EXPECT_TRUE(fs::exists(out / "masks" / "hand_made.png"));
+  EXPECT_TRUE(fs::exists(tmp.path() / "outside.txt"));
+  // The new manifest lists only what is written from now on.
+  writeFileAtomic((out / "trajectory.txt").string(), "new");
+  std::ifstream in(out / kManifestName);
+  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(all.find("\ntrajectory.txt\n"), std::string::npos) << all;
+  EXPECT_EQ(all.find("masks/"), std::string::npos) << all;
+}
+
+TEST(OutputFolder, WithoutManifestOverwriteKeepsEverything) {
+  testing::TempDir tmp;
+  std::ofstream(tmp.path() / "a.txt") << "x";
+  prepareOutputDir(tmp.str(), true);
+  EXPECT_TRUE(fs::exists(tmp.path() / "a.txt"));
+  EXPECT_NE(errorOf([] { prepareOutputDir("", true); }).find("output folder name is empty"), std::string::npos);
+}
+
+TEST(OutputFolder, OverlapWithAnInputIsRefused) {
+  testing::TempDir tmp;
+  const fs::path seq = tmp.path() / "seq";
+  fs::create_directories(seq / "rgb");
+  const std::string what = "the input sequence";
+  EXPECT_NE(errorOf([&] { refuseOverlap(seq.string(), seq.string(), what); }).find(" is the input sequence"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { refuseOverlap((seq / "." / "rgb" / "..").string(), seq.string(), what); })
+                .find(" is the input sequence"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { refuseOverlap(tmp.str(), seq.string(), what); }).find(" contains the input sequence"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { refuseOverlap((seq / "out").string(), seq.string(), what); })
+                .find(" lies inside the input sequence"),
+            std::string::npos);
+  fs::create_directory_symlink(seq, tmp.path() / "link");
+  EXPECT_NE(errorOf([&] { refuseOverlap((tmp.path() / "link").string(), seq.string(), what); }).find(" is the"),
+            std::string::npos);
+  EXPECT_NO_THROW(refuseOverlap((tmp.path() / "seq2").string(), seq.string(), what));
+  EXPECT_NO_THROW(refuseOverlap((tmp.path() / "out").string(), seq.string(), what));
+}
+
+}  // namespace
+}  // namespace ff
