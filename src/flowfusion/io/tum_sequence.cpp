@@ -5,12 +5,12 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <regex>
 #include <sstream>
 
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/core/image_file.h"
+#include "flowfusion/io/dataset_layout.h"
 #include "flowfusion/io/tum_text.h"
 
 namespace fs = std::filesystem;
@@ -70,21 +70,16 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
     s.camera_ = parseCameraModel(options.camera);
   } else if (fs::exists(root / "camera.txt")) {
     s.camera_ = readCameraFile((root / "camera.txt").string());
+  } else if (const auto dataset = detectDataset(dir)) {
+    s.camera_ = dataset->camera;
   } else {
-    std::string name = fs::weakly_canonical(root).filename().string();
-    std::smatch m;
-    if (std::regex_search(name, m, std::regex("^(rgbd_dataset_freiburg|fr)([123])_")))
-      s.camera_ = parseCameraModel("fr" + m[2].str());
-    else
-      throw InputError(dir + ": no camera intrinsics: give --camera fr1|fr2|fr3|fx,fy,cx,cy, put a camera.txt "
-                             "('fx fy cx cy width height') in the folder, or name it rgbd_dataset_freiburgN_*");
+    throw InputError(dir + ": no camera intrinsics: " + datasetHelp());
   }
 
   if (options.undistort && !s.camera_.distortion.none())
     s.undistorter_ = std::make_shared<Undistorter>(s.camera_.intrinsics, s.camera_.distortion);
 
-  const auto rgb = readFileList((root / "rgb.txt").string());
-  const auto depth = readFileList((root / "depth.txt").string());
+  const auto [rgb, depth] = readDatasetLists(dir);
   std::vector<double> ta, tb;
   for (const auto& e : rgb) ta.push_back(e.first);
   for (const auto& e : depth) tb.push_back(e.first);
@@ -95,7 +90,7 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
   for (const auto& [i, j] : pairs)
     s.entries_.push_back({rgb[i].first, (root / rgb[i].second).string(), depth[j].first,
                           (root / depth[j].second).string()});
-  if (fs::exists(root / "groundtruth.txt")) s.groundtruth_ = readTrajectory((root / "groundtruth.txt").string());
+  if (const auto gt = datasetGroundtruthFile(dir)) s.groundtruth_ = readTrajectory(*gt);
   return s;
 }
 

@@ -39,8 +39,8 @@ std::vector<std::pair<double, std::string>> readFileList(const std::string& path
 class TumSequence {
  public:
   // Reads the lists and resolves the camera: options.camera, else camera.txt in the folder, else
-  // the folder name (rgbd_dataset_freiburgN_* or frN_*). Throws InputError saying how to give
-  // intrinsics when none applies.
+  // the dataset the folder's name and files identify (io/dataset_layout.h: TUM, Bonn, ICL-NUIM,
+  // ETH3D). Throws InputError saying how to give intrinsics when none applies.
   static TumSequence open(const std::string& dir, const SequenceOptions& options = {});
 
   size_t size() const { return entries_.size(); }
