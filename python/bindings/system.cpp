@@ -1,0 +1,231 @@
+// ff.System (the per-frame system, frames from NumPy arrays) and ff.Result.
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cmath>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+
+#include "bindings.h"
+#include "convert.h"
+#include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/pipeline/files_sink.h"
+#include "sequence.h"
+
+namespace ff::py_bind {
+
+namespace {
+
+// The system and what save() needs of the frames it processed (their masks).
+class PySystem {
+ public:
+  PySystem(const CameraIntrinsics& camera, const SystemConfig& config, const SE3& T_world_first, bool keep_masks)
+      : system_(config, camera, T_world_first), keep_masks_(keep_masks) {}
+
+  // Called without the GIL.
+  FrameResult process(const RgbdFrame& frame) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (!std::isfinite(frame.timestamp)) throw BadArgument("timestamp: must be finite");
+    if (frames_ > 0 && !(frame.timestamp > last_timestamp_))
+      throw BadArgument("timestamp: " + std::to_string(frame.timestamp) + " is not after the previous frame's " +
+                        std::to_string(last_timestamp_) + " (frames must come in time order)");
+    FrameResult r = system_.process(frame);
+    last_timestamp_ = frame.timestamp;
+    ++frames_;
+    rounds_ += r.iterations;
+    if (keep_masks_) masks_.emplace_back(frame.timestamp, r.dynamic_mask.clone());
+    return r;
+  }
+
+  // FilesSink driven as runSequence drives it, so the files are those `flowfusion run` writes.
+  std::vector<std::string> save(const std::string& out_dir, bool overwrite, const PySequence* sequence,
+                                bool export_map) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    FilesSinkOptions options;
+    options.out_dir = out_dir;
+    options.overwrite = overwrite;
+    options.write_masks = keep_masks_;
+    options.export_map = export_map;
+    FilesSink sink(options);
+    const FrameSource* source = sequence ? &sequence->source() : nullptr;
+    sink.begin({source ? source->name() : "python", source, system_.config(), system_.camera(), frames_});
+    for (const auto& [timestamp, mask] : masks_) {
+      RgbdFrame frame;
+      frame.timestamp = timestamp;
+      FrameResult result;
+      result.dynamic_mask = mask;
+      sink.frame(frame, result);
+    }
+    RunSummary s;
+    s.frames = frames_;
+    s.mean_rounds = frames_ ? static_cast<double>(rounds_) / static_cast<double>(frames_) : 0.0;
+    s.trajectory = system_.trajectory();
+    s.tracking_failures = system_.trackingFailures();
+    s.flow_restarts = system_.flowRestarts();
+    s.timings = system_.timings();
+    if (const StaticMap* map = system_.map()) {
+      s.map_surfels = map->size();
+      s.map_budget_reached = map->budgetReached();
+    }
+    s.peak_memory_mib = eval::peakResidentMiB();
+    sink.end(s, system_);
+    return s.written;
+  }
+
+  const FlowFusionSystem& system() const { return system_; }
+  size_t frames() const { return frames_; }
+
+ private:
+  std::mutex mutex_;
+  FlowFusionSystem system_;
+  bool keep_masks_;
+  std::vector<std::pair<double, cv::Mat>> masks_;
+  size_t frames_ = 0;
+  long rounds_ = 0;
+  double last_timestamp_ = 0;
+};
+
+void checkSize(const cv::Mat& m, const CameraIntrinsics& camera, const std::string& name) {
+  if (m.cols != camera.width || m.rows != camera.height)
+    throw BadArgument(name + ": the image is " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
+                      " (WxH), the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+}
+
+// The frame from user arrays: RGB or grey uint8, depth uint16 (depth_scale per metre) or float32 metres.
+// The conversions run without the GIL.
+FrameResult processArrays(PySystem& s, const py::array& rgb, const py::array& depth, double timestamp,
+                          const py::object& depth_timestamp, double depth_scale) {
+  const CameraIntrinsics& camera = s.system().camera();
+  const bool grey = rgb.ndim() == 2;
+  const cv::Mat colour = matFromArray(rgb, "rgb", CV_8U, grey ? 1 : 3);
+  const bool raw = py::isinstance<py::array_t<uint16_t>>(depth);
+  if (!raw && !py::isinstance<py::array_t<float>>(depth))
+    throw BadArgument("depth: expected dtype uint16 (raw, depth_scale units per metre) or float32 (metres), got " +
+                      py::str(depth.dtype()).cast<std::string>());
+  const cv::Mat d = matFromArray(depth, "depth", raw ? CV_16U : CV_32F, 1);
+  checkSize(colour, camera, "rgb");
+  checkSize(d, camera, "depth");
+  if (!(depth_scale > 0 && std::isfinite(depth_scale))) throw BadArgument("depth_scale: must be a positive number");
+  RgbdFrame frame;
+  frame.timestamp = timestamp;
+  if (!depth_timestamp.is_none()) frame.depth_timestamp = depth_timestamp.cast<double>();
+  py::gil_scoped_release release;
+  cv::cvtColor(colour, frame.color, grey ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
+  frame.intensity = intensityFromBgr(frame.color);
+  if (raw) {
+    d.convertTo(frame.depth, CV_32F, 1.0 / depth_scale);
+  } else {
+    frame.depth = d;
+    cv::patchNaNs(frame.depth, 0.0);
+    if (!cv::checkRange(frame.depth, true, nullptr, 0.0, 1e4))
+      throw BadArgument("depth: float32 depth must be finite metres in [0, 10000] (0 or NaN = no measurement)");
+  }
+  return s.process(frame);
+}
+
+py::tuple mapPoints(const PySystem& s) {
+  MapPoints p;
+  if (const StaticMap* map = s.system().map()) p = map->points();
+  const auto n = static_cast<py::ssize_t>(p.positions.size());
+  py::array_t<float> positions({n, py::ssize_t{3}}), normals({n, py::ssize_t{3}});
+  py::array_t<uint8_t> colours({n, py::ssize_t{3}});
+  auto P = positions.mutable_unchecked<2>();
+  auto N = normals.mutable_unchecked<2>();
+  auto C = colours.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < n; ++i)
+    for (int j = 0; j < 3; ++j) {
+      P(i, j) = p.positions[i][j];
+      N(i, j) = p.normals[i][j];
+      C(i, j) = p.colors[i][2 - j];  // BGR -> RGB
+    }
+  return py::make_tuple(positions, colours, normals);
+}
+
+py::dict timings(const PySystem& s) {
+  const Timings& t = s.system().timings();
+  py::dict median;
+  for (const auto& stage : t.stages()) median[py::str(stage)] = t.medianMs(stage);
+  py::dict out;
+  out["median_ms"] = median;
+  out["frame_total_ms"] = py::cast(t.frameTotals());
+  return out;
+}
+
+}  // namespace
+
+void bindSystem(py::module_& m) {
+  py::class_<FrameResult>(m, "Result", "What System.process returns for one frame.")
+      .def_readonly("timestamp", &FrameResult::timestamp, "Seconds.")
+      .def_property_readonly("T_world_cam", [](const FrameResult& r) { return arrayFromPose(r.T_world_cam); },
+                             "4x4 float64 camera-to-world pose.")
+      .def_property_readonly("dynamic_mask", [](const FrameResult& r) { return arrayFromMat(r.dynamic_mask); },
+                             "HxW uint8, 255 = dynamic, in the frame's pixels.")
+      .def_property_readonly(
+          "scores",
+          [](const FrameResult& r) -> py::object {
+            if (r.scores.empty()) return py::none();
+            return arrayFromMat(r.scores);
+          },
+          "Dynamic score b per pixel at the segmentation level (float32), or None without segmentation.")
+      .def_readonly("tracking_ok", &FrameResult::tracking_ok, "False when the tracker lost the camera.")
+      .def_readonly("message", &FrameResult::message, "What the tracker did when it did not simply succeed.")
+      .def_readonly("used_model", &FrameResult::used_model, "Aligned to the map's prediction.")
+      .def_readonly("restarted_from_flow", &FrameResult::restarted_from_flow,
+                    "The odometry restarted from the flow's rigid consensus.")
+      .def_readonly("iterations", &FrameResult::iterations, "Segmentation rounds.");
+
+  py::class_<PySystem>(m, "System",
+                       "The FlowFusion system: feed frames in time order with process(); it tracks the camera, "
+                       "segments moving objects and maps the static scene.")
+      .def(py::init([](const CameraModel& camera, const std::optional<SystemConfig>& config,
+                       const py::object& T_world_first, bool keep_masks) {
+             const SE3 T = T_world_first.is_none() ? SE3::Identity() : poseFromArray(T_world_first, "T_world_first");
+             return std::make_unique<PySystem>(camera.intrinsics, config.value_or(SystemConfig{}), T, keep_masks);
+           }),
+           py::arg("camera"), py::arg("config") = py::none(), py::arg("T_world_first") = py::none(),
+           py::arg("keep_masks") = true,
+           "System(camera, config=None, T_world_first=None, keep_masks=True): camera an ff.Camera (its pinhole "
+           "intrinsics; frames must be undistorted), config an ff.Config (defaults when None), T_world_first the "
+           "4x4 pose of the first frame (identity when None). keep_masks keeps each frame's mask for save() "
+           "(W*H bytes a frame). ValueError naming the first bad setting.")
+      .def("process", &processArrays, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"),
+           py::arg("depth_timestamp") = py::none(), py::arg("depth_scale") = 5000.0,
+           "process(rgb, depth, timestamp, depth_timestamp=None, depth_scale=5000.0) -> Result. rgb: HxWx3 uint8 "
+           "RGB or HxW uint8 grey; depth: HxW uint16 (depth_scale units per metre) or float32 metres (0 or NaN = "
+           "no measurement); timestamp in seconds, increasing; depth_timestamp the depth image's time when it "
+           "differs. The arrays must have the camera's size. Releases the GIL while it runs.")
+      .def(
+          "process",
+          [](PySystem& s, const RgbdFrame& frame) {
+            checkSize(frame.depth, s.system().camera(), "frame");
+            py::gil_scoped_release release;
+            return s.process(frame);
+          },
+          py::arg("frame"), "process(frame) -> Result for an ff.Frame from a TumSequence.")
+      .def(
+          "trajectory", [](const PySystem& s) { return arrayFromTrajectory(s.system().trajectory()); },
+          "The poses so far, Nx8 float64: t tx ty tz qx qy qz qw (TUM, camera-to-world).")
+      .def("map_points", &mapPoints,
+           "The static map's stable surfels: (positions Nx3 float32 metres, colours Nx3 uint8 RGB, normals Nx3 "
+           "float32); empty with fusion off.")
+      .def("timings", &timings, "{'median_ms': {stage: ms}, 'frame_total_ms': [ms per frame]}.")
+      .def(
+          "save",
+          [](PySystem& s, const std::filesystem::path& out_dir, bool overwrite, const PySequence* sequence,
+             bool export_map) {
+            py::gil_scoped_release release;
+            return s.save(out_dir.string(), overwrite, sequence, export_map);
+          },
+          py::arg("out_dir"), py::arg("overwrite") = false, py::arg("sequence") = nullptr,
+          py::arg("export_map") = true,
+          "save(out_dir, overwrite=False, sequence=None, export_map=True) -> list of written paths: the files "
+          "`flowfusion run` writes (config.json, trajectory.txt, masks/, timings.csv, map.ply, map_points.ply, "
+          "preview/, summary.json). With the TumSequence the frames came from, masks go back to its raw pixels "
+          "and summary.json names it, as a run's. ValueError when out_dir is not empty and overwrite is False.")
+      .def_property_readonly("frames", &PySystem::frames, "Frames processed so far.")
+      .def_property_readonly("config", [](const PySystem& s) { return s.system().config(); }, "The ff.Config in use.")
+      .def_property_readonly("camera", [](const PySystem& s) { return CameraModel{s.system().camera(), {}}; },
+                             "The pinhole camera in use.");
+}
+
+}  // namespace ff::py_bind
