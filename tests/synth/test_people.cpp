@@ -188,7 +188,8 @@ TEST(People, SameSeedSameImagesAndSittingPerson) {
   longer.seats = 1;
   const SyntheticScene s(longer);
   double lowest = 1e9;
-  for (double t = 0; t < 20; t += 0.1) lowest = std::min(lowest, s.person(0)->partPose(BodyPart::Pelvis, t).translation().z());
+  for (double t = 0; t < 20; t += 0.1)
+    lowest = std::min(lowest, s.person(0)->partPose(BodyPart::Pelvis, t).translation().z());
   EXPECT_LT(lowest, 0.65) << "seated pelvis height, m";
 }
 

@@ -248,7 +248,8 @@ std::array<SE3, kBodyParts> Body::partPoses(double t) const {
     double elbow = 0.2 + 0.6 * std::max(0.0, swing);
     swing += st.sit * (0.35 - swing);
     elbow += st.sit * (1.0 - elbow);
-    const Eigen::Vector3d shoulder = origin + R_torso * Eigen::Vector3d(0, sign * d.shoulder_half(), d.shoulder_height());
+    const Eigen::Vector3d shoulder =
+        origin + R_torso * Eigen::Vector3d(0, sign * d.shoulder_half(), d.shoulder_height());
     const Eigen::Matrix3d R_upper = R_torso * rotY(-swing);
     const Eigen::Vector3d elbow_point = shoulder - d.upper_arm() * R_upper.col(2);
     const int arm = side == 0 ? static_cast<int>(BodyPart::UpperArmLeft) : static_cast<int>(BodyPart::UpperArmRight);

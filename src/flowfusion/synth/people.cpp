@@ -41,8 +41,14 @@ std::vector<MovingObject> personObjects(SceneModel& m, Rng& rng, const std::shar
         case Body::Material::Trousers: tex = trousers; break;
         case Body::Material::Shirt: tex = shirt; break;
         case Body::Material::Skin: tex = skin; break;
-        case Body::Material::Hair: tex = hair, albedo = 0.5f; break;
-        case Body::Material::Shoes: tex = shoes, albedo = 0.35f; break;
+        case Body::Material::Hair:
+          tex = hair;
+          albedo = 0.5f;
+          break;
+        case Body::Material::Shoes:
+          tex = shoes;
+          albedo = 0.35f;
+          break;
       }
       obj.shape.add(box(b.lo, b.hi, tex, rng, albedo));
     }

@@ -386,7 +386,8 @@ void addPushedObjects(SceneModel& m, const SynthConfig& cfg, const WalkLine& vie
     const Eigen::Vector2d at = line.point(rng.uniform(-0.6, 0.6));
     path->base.translation() = Eigen::Vector3d(at.x(), at.y(), 0);
     path->base.linear() = Eigen::AngleAxisd(rng.uniform(0, 2 * M_PI), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const Eigen::Vector2d push = rng.sign() * rng.uniform(0.6, 1.0) * line.lateral() + rng.uniform(-0.2, 0.2) * line.view;
+    const Eigen::Vector2d push =
+        rng.sign() * rng.uniform(0.6, 1.0) * line.lateral() + rng.uniform(-0.2, 0.2) * line.view;
     path->push = Eigen::Vector3d(push.x(), push.y(), 0);
     path->rest_s = cfg.rest_s;
     path->push_s = rng.uniform(1.2, 1.8);
@@ -426,7 +427,8 @@ void validate(const SynthConfig& c) {
   if (!std::isfinite(c.start_time) || c.start_time < 0) bad("start_time must be >= 0 s");
   if (c.people < 0 || c.people > 8) bad("people must be in 0..8, got " + std::to_string(c.people));
   if (c.seats < 0 || c.seats > 4) bad("seats must be in 0..4, got " + std::to_string(c.seats));
-  if (c.near_objects < 0 || c.near_objects > 4) bad("near_objects must be in 0..4, got " + std::to_string(c.near_objects));
+  if (c.near_objects < 0 || c.near_objects > 4)
+    bad("near_objects must be in 0..4, got " + std::to_string(c.near_objects));
   if (c.pushed_objects < 0 || c.pushed_objects > 4)
     bad("pushed_objects must be in 0..4, got " + std::to_string(c.pushed_objects));
   if (!(c.rest_s >= 0 && c.rest_s <= 600)) bad("rest_s must be in [0, 600] s");
