@@ -23,6 +23,11 @@ struct SequenceOptions {
   // Undistort frames as they are loaded when the camera has lens distortion (fr1, fr2 or
   // coefficients in the spec or camera.txt); false feeds the raw images to the pinhole model.
   bool undistort = true;
+  // ROS bags (io/bag_source.h): the colour and depth topics ("" = found by name), raw 16UC1 depth
+  // units per metre (ROS drivers: millimetres) and a TUM groundtruth.txt for the recording ("" = none).
+  std::string rgb_topic, depth_topic;
+  double bag_depth_scale = 1000.0;
+  std::string groundtruth;
 };
 
 struct FrameEntry {

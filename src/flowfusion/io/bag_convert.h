@@ -1,0 +1,22 @@
+#pragma once
+// `flowfusion convert`: a ROS 1 bag (io/bag_reader.h) written as a TUM-layout folder that any
+// TUM tool reads: rgb/ (8-bit BGR PNG as recorded, not undistorted), depth/ (16-bit PNG at 5000
+// units per metre, TUM's scale), rgb.txt and depth.txt (the header stamps), camera.txt (with the
+// lens distortion when there is one) and groundtruth.txt when options.groundtruth is given.
+#include <string>
+
+#include "flowfusion/io/tum_sequence.h"
+
+namespace ff {
+
+struct BagConversion {
+  size_t frames = 0;              // associated colour-depth pairs written
+  size_t saturated_pixels = 0;    // depth beyond 65535 / 5000 = 13.1 m, written as 65535
+  std::string color_topic, depth_topic;
+};
+
+// A non-empty `out_dir` is an InputError unless `overwrite` is set.
+BagConversion convertBagToTum(const std::string& bag_path, const std::string& out_dir,
+                              const SequenceOptions& options, bool overwrite = false);
+
+}  // namespace ff

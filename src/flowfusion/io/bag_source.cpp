@@ -1,0 +1,46 @@
+#include "flowfusion/io/bag_source.h"
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+BagSource::BagSource(const std::string& path, const SequenceOptions& options, FrameRange range)
+    : reader_(BagReader::open(path, options)) {
+  const size_t n = reader_.size();
+  next_ = static_cast<size_t>(range.first);
+  last_ = range.last < 0 ? n - 1 : static_cast<size_t>(range.last);
+  if (next_ >= n || last_ >= n)
+    throw InputError(path + ": --frames " + std::to_string(range.first) + ":" + std::to_string(range.last) +
+                     " is outside the bag's " + std::to_string(n) + " associated frames");
+  const CameraModel& camera = reader_.camera();
+  if (options.undistort && !camera.distortion.none()) undistorter_.emplace(camera.intrinsics, camera.distortion);
+  if (!options.groundtruth.empty()) groundtruth_ = readTrajectory(options.groundtruth);
+}
+
+std::optional<RgbdFrame> BagSource::next() {
+  if (next_ > last_) return std::nullopt;
+  BagFrame raw = reader_.read(next_++);
+  cv::Mat color = raw.bgr8, depth = raw.depth;
+  if (undistorter_) {
+    color = undistorter_->undistortColor(color);
+    depth = undistorter_->undistortDepth(depth);  // nearest: the same for raw units and metres
+  }
+  RgbdFrame frame;
+  if (depth.type() == CV_16UC1) {
+    frame = makeRgbdFrame(raw.timestamp, color, depth, raw.depth_scale, raw.name);
+  } else {
+    frame.timestamp = raw.timestamp;
+    frame.color = color;
+    frame.intensity = intensityFromBgr(color);
+    frame.depth = depth;
+    frame.name = raw.name;
+  }
+  frame.depth_timestamp = raw.depth_timestamp;
+  return frame;
+}
+
+cv::Mat BagSource::toRawPixels(const cv::Mat& image) const {
+  return undistorter_ ? undistorter_->toRawPixels(image) : image;
+}
+
+}  // namespace ff
