@@ -7,6 +7,8 @@
 #include "command.h"
 #include "config_sources.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/output_folder.h"
+#include "flowfusion/io/tum_text.h"
 #include "flowfusion/pipeline/run_sequence.h"
 #include "flowfusion/synth/synthetic_scene.h"
 
@@ -14,6 +16,26 @@ namespace {
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The longest sequence synth writes, about 55 minutes at 30 Hz: a larger count is a typo that
+// would fill the disk.
+constexpr int kMaxSynthFrames = 100000;
+
+// Bounds the library's validation leaves open: the frame count, and timestamps that stay below
+// what the sequence readers accept.
+void checkSynthRange(const ff::synth::SynthConfig& c) {
+  if (c.frames > kMaxSynthFrames)
+    throw ff::InputError("--frames: at most " + std::to_string(kMaxSynthFrames) +
+                         " frames (about 55 minutes at 30 Hz), got " + std::to_string(c.frames));
+  const double last_s = c.start_time + (c.frames - 1) / c.fps;
+  if (!(last_s < ff::kMaxTimestampS))
+    throw ff::InputError("synth: the last timestamp (start_time + frames / fps) must stay below 1e10 s");
+}
+
+// CLI11 reads "-1" into an unsigned seed as 2^64 - 1: a sign is refused before that.
+void refuseNegativeSeed(const std::string& value) {
+  if (value.find('-') != std::string::npos) throw ff::InputError("--seed: must be 0 or more, got " + value);
 }
 
 const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
@@ -27,7 +49,9 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "synth", "Render a synthetic dynamic indoor RGB-D sequence with exact ground truth (TUM layout + masks)");
   cmd->add_option("OUT", o->out, "Output folder")->required();
-  cmd->add_option("--seed", o->config.seed, "Random seed (room, camera path, objects, noise)")->capture_default_str();
+  cmd->add_option("--seed", o->config.seed, "Random seed (room, camera path, objects, noise)")
+      ->capture_default_str()
+      ->each(refuseNegativeSeed);
   cmd->add_option("--frames", o->config.frames, "Number of frames")->capture_default_str();
   cmd->add_option("--objects", o->config.objects, "Moving objects (0: the static twin of the same seed)")
       ->capture_default_str();
@@ -45,6 +69,7 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
     ff::synth::SynthConfig defaults = o->config;
     if (o->no_noise) defaults.noise = false;
     const auto config = o->sources.resolve(defaults);
+    checkSynthRange(config);
     const auto t0 = std::chrono::steady_clock::now();
     const ff::synth::SyntheticScene scene(config);
     ff::synth::writeSequence(scene, o->out, o->overwrite);
@@ -67,7 +92,9 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
       "augment", "Insert textured moving objects into a real static sequence with ground truth (TUM layout)");
   cmd->add_option("STATIC_SEQUENCE", o->input, "Static TUM sequence folder with groundtruth.txt")->required();
   cmd->add_option("OUT", o->out, "Output folder")->required();
-  cmd->add_option("--seed", o->config.seed, "Random seed (objects, paths, noise)")->capture_default_str();
+  cmd->add_option("--seed", o->config.seed, "Random seed (objects, paths, noise)")
+      ->capture_default_str()
+      ->each(refuseNegativeSeed);
   cmd->add_option("--objects", o->config.objects, "Number of inserted objects")->capture_default_str();
   cmd->add_option("--camera", o->sequence.camera,
                   "Intrinsics: fr1|fr2|fr3 or fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]] (default: detect); the "
@@ -89,6 +116,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
     const auto config = o->sources.resolve(defaults);
     o->sequence.undistort = !o->no_undistort;
     const auto t0 = std::chrono::steady_clock::now();
+    ff::refuseOverlap(o->out, o->input, "the input sequence");
     const auto report = ff::synth::augmentSequence(o->input, o->out, config, o->sequence, o->overwrite);
     if (!report.dropped_timestamps.empty()) {
       std::cerr << "augment: dropped " << report.dropped_timestamps.size()
