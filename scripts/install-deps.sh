@@ -10,7 +10,8 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libeigen3-dev libopencv-dev libopencv-contrib-dev libpcl-dev libopen3d-dev \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
   libspdlog-dev libfmt-dev libtbb-dev \
-  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-distributed
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-distributed \
+  libjs-three chromium
 # ROS 1 bags (`flowfusion run FILE.bag`, `flowfusion convert`): rosbag storage and the sensor_msgs
 # headers; without them flowfusion builds and says how to enable bags when given one.
 $SUDO apt-get install -y -qq --no-install-recommends librosbag-storage-dev libsensor-msgs-dev

@@ -1,0 +1,17 @@
+#include "flowfusion/report/report_sink.h"
+
+#include "flowfusion/core/error.h"
+
+namespace ff::report {
+
+ReportSink::ReportSink(ReportOptions options) : options_(std::move(options)) {}
+
+void ReportSink::end(RunSummary& summary, const FlowFusionSystem&) {
+  try {
+    summary.written.push_back(writeReport(options_));
+  } catch (const InputError& e) {
+    summary.notes.push_back(std::string("no report written: ") + e.what());
+  }
+}
+
+}  // namespace ff::report
