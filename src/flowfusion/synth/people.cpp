@@ -71,7 +71,9 @@ std::shared_ptr<Body> walkerScript(Rng& rng, const WalkLine& line, double t0, do
   const double start = -dir * line.half_m * rng.uniform(0.3, 1.0);
   const FloorPose pose{line.point(start), headingOf(dir * line.lateral())};
   auto body = std::make_shared<Body>(dims, pose, t0, T_world_floor);
-  const double curvature = rng.uniform(0.0, 0.15) * rng.sign();
+  // One draw per statement, so that the sequence of draws does not depend on the compiler.
+  const double bend = rng.uniform(0.0, 0.15);
+  const double curvature = bend * rng.sign();
   bool first = true;
   for (int leg = 0; body->endTime() < t_end; ++leg) {
     const double remaining = first ? std::fabs(dir * line.half_m - start) : length;
@@ -98,7 +100,10 @@ std::shared_ptr<Body> sitterScript(Rng& rng, const WalkLine& line, const Eigen::
   body->walk(away, speed);
   while (body->endTime() < t_end) {
     body->turn(angleTo(body->pose().heading, headingOf(towards_camera)));
-    body->sit(seat_height_m, 0.3, rng.uniform(1.0, 1.4), rng.uniform(1.5, 3.0), rng.uniform(1.0, 1.4));
+    const double up_s = rng.uniform(1.0, 1.4);
+    const double hold_s = rng.uniform(1.5, 3.0);
+    const double down_s = rng.uniform(1.0, 1.4);
+    body->sit(seat_height_m, 0.3, down_s, hold_s, up_s);
     const double leave = rng.sign();
     body->turn(angleTo(body->pose().heading, headingOf(leave * line.lateral())));
     body->walk(away, speed);

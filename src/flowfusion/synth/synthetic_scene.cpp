@@ -386,8 +386,11 @@ void addPushedObjects(SceneModel& m, const SynthConfig& cfg, const WalkLine& vie
     const Eigen::Vector2d at = line.point(rng.uniform(-0.6, 0.6));
     path->base.translation() = Eigen::Vector3d(at.x(), at.y(), 0);
     path->base.linear() = Eigen::AngleAxisd(rng.uniform(0, 2 * M_PI), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const Eigen::Vector2d push =
-        rng.sign() * rng.uniform(0.6, 1.0) * line.lateral() + rng.uniform(-0.2, 0.2) * line.view;
+    // One draw per statement, so that the sequence of draws does not depend on the compiler.
+    const double towards = rng.uniform(-0.2, 0.2);
+    const double side = rng.sign();
+    const double across = rng.uniform(0.6, 1.0);
+    const Eigen::Vector2d push = side * across * line.lateral() + towards * line.view;
     path->push = Eigen::Vector3d(push.x(), push.y(), 0);
     path->rest_s = cfg.rest_s;
     path->push_s = rng.uniform(1.2, 1.8);
