@@ -131,7 +131,7 @@ struct BagReader::Impl {
   [[noreturn]] void fail(const std::string& message) const { throw InputError(path + ": " + message); }
 
   void pickTopics();
-  std::vector<double> readStamps(const std::string& topic, const std::string& type, Kind kind);
+  void readStamps();
   void readCamera();
   cv::Mat decodeColor(const rosbag::MessageInstance& m, const std::string& name) const;
   cv::Mat decodeDepth(const rosbag::MessageInstance& m, const std::string& name, double& scale) const;
@@ -180,11 +180,15 @@ void BagReader::Impl::pickTopics() {
   depth_type = typeOf(depth_topic);
 }
 
-// Each message's header stamp, its encoding checked (one pass over the topic, one message at a time).
-std::vector<double> BagReader::Impl::readStamps(const std::string& topic, const std::string& type, Kind kind) {
-  std::vector<double> out;
-  rosbag::View view(bag, rosbag::TopicQuery(topic));
+// Each image message's header stamp, its encoding checked: one pass over both topics in the bag's
+// order (a compressed chunk holding a colour and a depth message is decompressed once).
+void BagReader::Impl::readStamps() {
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{color_topic, depth_topic}));
   for (const rosbag::MessageInstance& m : view) {
+    const bool is_color = m.getTopic() == color_topic;
+    const std::string& topic = is_color ? color_topic : depth_topic;
+    const std::string& type = is_color ? color_type : depth_type;
+    std::vector<double>& out = is_color ? color_stamps : depth_stamps;
     double t;
     std::string encoding;
     if (type == kImageType) {
@@ -196,7 +200,8 @@ std::vector<double> BagReader::Impl::readStamps(const std::string& topic, const 
       t = seconds(msg->header.stamp);
       encoding = str(msg->format);
     }
-    if (const std::string problem = encodingProblem(type, encoding, kind); !problem.empty())
+    if (const std::string problem = encodingProblem(type, encoding, is_color ? Kind::kColor : Kind::kDepth);
+        !problem.empty())
       fail(topic + " message " + std::to_string(out.size()) + ": " + problem);
     if (!out.empty() && !(t > out.back()))
       fail(topic + " message " + std::to_string(out.size()) + ": header stamp " + timestampName(t) +
@@ -204,7 +209,6 @@ std::vector<double> BagReader::Impl::readStamps(const std::string& topic, const 
            " (stamps must increase in the bag's order)");
     out.push_back(t);
   }
-  return out;
 }
 
 void BagReader::Impl::readCamera() {
@@ -357,8 +361,7 @@ BagReader BagReader::open(const std::string& path, const SequenceOptions& option
   try {
     impl->bag.open(path, rosbag::bagmode::Read);
     impl->pickTopics();
-    impl->color_stamps = impl->readStamps(impl->color_topic, impl->color_type, Kind::kColor);
-    impl->depth_stamps = impl->readStamps(impl->depth_topic, impl->depth_type, Kind::kDepth);
+    impl->readStamps();
     impl->readCamera();
   } catch (const ros::Exception& e) {  // rosbag's BagException, a message's StreamOverrunException
     throw InputError(path + ": not a readable ROS 1 bag (truncated or corrupt?): " + e.what());
