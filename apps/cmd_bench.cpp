@@ -8,10 +8,13 @@
 
 #include "command.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/eval/reference_odometry.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
-#include "flowfusion/pipeline/run_sequence.h"
+#include "flowfusion/io/tum_folder_source.h"
+#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/run.h"
 #include "sequence_options.h"
 
 namespace fs = std::filesystem;
@@ -52,18 +55,19 @@ void addTrajectoryErrors(Row& row, const TumSequence& seq, const Trajectory& est
 
 Row runOurs(const TumSequence& seq, const std::string& label, const std::string& method, SystemConfig config,
             const BenchCommand& c, const fs::path& out_root) {
-  RunOptions o;
+  FilesSinkOptions o;
   o.out_dir = (out_root / label / method).string();
   o.overwrite = true;
   o.export_map = false;
-  if (!c.system.frames.empty()) o.frames = parseFrameRange(c.system.frames);
-  const RunSummary s = runSequence(seq, config, o);
+  FilesSink files(o);
+  TumFolderSource source(seq, c.system.frames.empty() ? FrameRange{} : parseFrameRange(c.system.frames));
+  const RunSummary s = runSequence(source, config, {&files});
   Row row;
   row.sequence = label;
   row.method = method;
   row.frames = s.frames;
   addTrajectoryErrors(row, seq, s.trajectory);
-  row.total_ms = eval::median(s.timings.frameTotals());
+  row.total_ms = median(s.timings.frameTotals());
   for (const auto& stage : kStages)
     row.stage_ms.push_back(s.timings.samples(stage).empty() ? NAN : s.timings.medianMs(stage));
   if (config.pipeline.fusion && s.frames > 0) {
@@ -82,17 +86,18 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
   return row;
 }
 
-Row runReference(const TumSequence& seq, const std::string& label, const std::string& kind, const BenchCommand& c) {
+Row runReference(const TumSequence& seq, const std::string& label, eval::ReferenceMethod method,
+                 const BenchCommand& c) {
   std::optional<size_t> max_frames;
   if (!c.system.frames.empty()) {
     const FrameRange r = parseFrameRange(c.system.frames);
     if (r.first != 0) throw InputError("bench: --frames must start at 0 when the OpenCV columns run (or pass --no-reference)");
     if (r.last >= 0) max_frames = static_cast<size_t>(r.last) + 1;
   }
-  const eval::ReferenceRun run = eval::runReferenceOdometry(kind, seq, max_frames);
+  const eval::ReferenceRun run = eval::runReferenceOdometry(method, seq, max_frames);
   Row row;
   row.sequence = label;
-  row.method = kind == "rgbd" ? "opencv-RgbdOdometry" : "opencv-RgbdICPOdometry";
+  row.method = eval::methodName(method);
   row.frames = run.trajectory.size();
   addTrajectoryErrors(row, seq, run.trajectory);
   row.total_ms = run.median_ms;
@@ -117,11 +122,11 @@ void execute(const BenchCommand& c) {
     SystemConfig plain = config;
     plain.pipeline.segmentation = false;
     plain.pipeline.fusion = false;
-    if (plain.pipeline.tracking == "frame_to_model") plain.pipeline.tracking = "frame_to_keyframe";
+    if (plain.pipeline.tracking == TrackingMode::FrameToModel) plain.pipeline.tracking = TrackingMode::FrameToKeyframe;
     rows.push_back(runOurs(seq, label, "odometry-only", plain, c, out_root));
     if (!c.no_reference) {
-      rows.push_back(runReference(seq, label, "rgbd", c));
-      rows.push_back(runReference(seq, label, "icp", c));
+      rows.push_back(runReference(seq, label, eval::ReferenceMethod::RgbdOdometry, c));
+      rows.push_back(runReference(seq, label, eval::ReferenceMethod::RgbdIcpOdometry, c));
     }
   }
   if (!keep) fs::remove_all(out_root);

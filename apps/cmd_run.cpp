@@ -1,17 +1,44 @@
-// `flowfusion run SEQUENCE --out DIR`: the whole system on one sequence.
+// `flowfusion run SEQUENCE --out DIR`: frames from a source, through the system, to the files
+// sink (and a progress line). SIGINT/SIGTERM stop it after the current frame with an honest,
+// marked partial result.
 #include <unistd.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
-#include <iostream>
 
 #include "command.h"
-#include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/eval/trajectory_metrics.h"
-#include "flowfusion/pipeline/run_sequence.h"
+#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/run.h"
 #include "sequence_options.h"
 
 namespace ff::app {
 namespace {
+
+std::atomic<bool> g_stop{false};
+std::atomic<int> g_signal{0};
+const char* g_reason = nullptr;
+
+void onSignal(int sig) {
+  g_reason = sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)";
+  g_signal = sig;
+  g_stop = true;
+}
+
+// "frame N/M" on a terminal.
+class ProgressSink : public ResultSink {
+ public:
+  void begin(const RunInfo& info) override { total_ = info.expected_frames.value_or(0); }
+  void frame(const RgbdFrame&, const FrameResult&) override {
+    ++done_;
+    if (done_ % 10 == 0 || done_ == total_) std::fprintf(stderr, "\rframe %zu/%zu", done_, total_);
+  }
+  void end(RunSummary&, const FlowFusionSystem&) override { std::fprintf(stderr, "\n"); }
+
+ private:
+  size_t done_ = 0, total_ = 0;
+};
 
 struct RunCommand {
   std::string sequence, out;
@@ -19,37 +46,47 @@ struct RunCommand {
   SystemOptions system;
 };
 
-void execute(const RunCommand& c) {
-  const TumSequence seq = TumSequence::open(c.sequence, c.system.sequenceOptions());
-  const SystemConfig config = c.system.systemConfig();
-  RunOptions o;
-  o.out_dir = c.out;
-  o.overwrite = c.overwrite;
-  if (!c.system.frames.empty()) o.frames = parseFrameRange(c.system.frames);
-  o.write_overlays = c.overlays;
-  o.export_map = !c.no_map;
-  const bool tty = isatty(fileno(stderr));
-  if (!c.quiet && tty)
-    o.progress = [](size_t done, size_t total) {
-      if (done == total || done % 10 == 0) std::fprintf(stderr, "\rframe %zu/%zu", done, total);
-      if (done == total) std::fprintf(stderr, "\n");
-    };
-  const RunSummary s = runSequence(seq, config, o);
-  if (c.quiet) return;
+void printSummary(const RunSummary& s, const FrameSource& source) {
   std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
               s.tracking_failures, s.flow_restarts);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
-  std::printf(" (mean total %.1f ms)\n", eval::mean(s.timings.frameTotals()));
-  if (seq.groundtruth()) {
-    const auto ate = eval::computeAte(*seq.groundtruth(), s.trajectory);
+  std::printf(" (mean total %.1f ms)\n", mean(s.timings.frameTotals()));
+  if (source.groundtruth() && !s.trajectory.empty()) {
+    const auto ate = eval::computeAte(*source.groundtruth(), s.trajectory);
     std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,
                 ate.matched_poses);
   }
   std::printf("map: %zu surfels%s; peak memory %.0f MiB\n", s.map_surfels,
               s.map_budget_reached ? " (budget reached: raise fusion.max_surfels for more)" : "", s.peak_memory_mib);
+  for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
   std::printf("wrote:");
   for (const auto& w : s.written) std::printf(" %s", w.c_str());
   std::printf("\n");
+}
+
+void execute(const RunCommand& c) {
+  const SystemConfig config = c.system.systemConfig();
+  FilesSinkOptions files;
+  files.out_dir = c.out;
+  files.overwrite = c.overwrite;
+  files.write_overlays = c.overlays;
+  files.export_map = !c.no_map;
+  FilesSink sink(files);
+  const std::unique_ptr<FrameSource> source = c.system.openSource(c.sequence);
+  ProgressSink progress;
+  std::vector<ResultSink*> sinks = {&sink};
+  if (!c.quiet && isatty(fileno(stderr))) sinks.push_back(&progress);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  const RunSummary s = runSequence(*source, config, sinks, {&g_stop, &g_reason});
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (!s.complete) {
+    std::fprintf(stderr, "flowfusion: run stopped after %zu frames: %s; partial results in %s (summary.json says so)\n",
+                 s.frames, s.stop_reason.c_str(), c.out.c_str());
+    throw ExitStatus{128 + g_signal.load()};
+  }
+  if (!c.quiet) printSummary(s, *source);
 }
 
 const RegisterCommand reg("1-run", [](CLI::App& app) {

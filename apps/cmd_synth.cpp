@@ -2,14 +2,15 @@
 // ground truth (TUM layout with masks/, groundtruth.txt, camera.txt, scene.json).
 #include <chrono>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "command.h"
 #include "config_sources.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/core/output_folder.h"
+#include "flowfusion/io/frame_source.h"
 #include "flowfusion/io/tum_text.h"
-#include "flowfusion/pipeline/run_sequence.h"
 #include "flowfusion/synth/synthetic_scene.h"
 
 namespace {
@@ -63,6 +64,29 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--object-speed", o->config.object_speed, "RMS object speed, m/s")->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "Exact depth without holes, noise-free colour");
+  cmd->add_option("--people", o->config.people, "Articulated people walking across the first view (0..8)")
+      ->capture_default_str();
+  cmd->add_option("--seats", o->config.seats,
+                  "Seats in the first view (static); person k < seats sits on seat k (0..4)")
+      ->capture_default_str();
+  cmd->add_option("--near-objects", o->config.near_objects,
+                  "Large boxes 1.0-1.5 m in front of the first camera, crossing its view (0..4)")
+      ->capture_default_str();
+  cmd->add_option("--pushed-objects", o->config.pushed_objects,
+                  "Chairs and boxes that rest, are pushed, rest, are pushed back (0..4)")
+      ->capture_default_str();
+  cmd->add_option("--rest-s", o->config.rest_s, "Seconds pushed objects rest before each push")->capture_default_str();
+  cmd->add_option("--camera-motion", o->config.camera_motion,
+                  "handheld (mostly yaw) or rpy (fast rotation about all axes; speed from --angular-speed)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, ff::synth::CameraMotion>{
+                                              {"handheld", ff::synth::CameraMotion::Handheld},
+                                              {"rpy", ff::synth::CameraMotion::Rpy}},
+                                          CLI::ignore_case));
+  cmd->add_option("--exposure-ms", o->config.exposure_ms,
+                  "Motion blur: exposure time in ms over which camera and objects move (0: off)")
+      ->capture_default_str();
+  cmd->add_option("--exposure-samples", o->config.exposure_samples, "Sub-frame renders averaged per exposure")
+      ->capture_default_str();
   o->sources.addTo(cmd, "SynthConfig");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] {
@@ -74,7 +98,8 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
     const ff::synth::SyntheticScene scene(config);
     ff::synth::writeSequence(scene, o->out, o->overwrite);
     std::cout << "synth: wrote " << scene.frameCount() << " frames (" << scene.camera().width << "x"
-              << scene.camera().height << ", " << scene.objectCount() << " moving objects, seed " << config.seed
+              << scene.camera().height << ", " << scene.objectCount() << " moving objects of which "
+              << scene.personCount() << " people, seed " << config.seed
               << ") to " << o->out << " in " << secondsSince(t0) << " s\n";
   });
 });
@@ -101,6 +126,12 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
                   "output is undistorted and its camera.txt pinhole");
   cmd->add_option("--frames", o->frames, "Colour frame range FIRST:LAST (inclusive indices)");
   cmd->add_option("--object-speed", o->config.object_speed, "RMS object speed, m/s")->capture_default_str();
+  cmd->add_option("--people", o->config.people,
+                  "Articulated people walking across the first view, 1.0-1.6 m in front (0..8)")
+      ->capture_default_str();
+  cmd->add_option("--camera-height", o->config.camera_height,
+                  "Height of the first camera above the floor the people walk on, m")
+      ->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "No depth noise on the inserted objects");
   cmd->add_flag("--no-undistort", o->no_undistort, "Keep the raw images (ignore the camera's lens distortion)");
   o->sources.addTo(cmd, "AugmentConfig");
@@ -125,7 +156,8 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
       std::cerr << '\n';
     }
     std::cout << "augment: wrote " << report.frames_written << " frames with " << config.objects
-              << " moving objects to " << o->out << " in " << secondsSince(t0) << " s\n";
+              << " moving objects and " << config.people << " people to " << o->out << " in " << secondsSince(t0)
+              << " s\n";
   });
 });
 

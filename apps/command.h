@@ -15,6 +15,12 @@ struct CommandRegistration {
 
 std::vector<CommandRegistration>& commandRegistry();
 
+// Thrown by a subcommand that ends with a particular exit status after saying why (e.g. 130 for
+// a run stopped by SIGINT).
+struct ExitStatus {
+  int code;
+};
+
 struct RegisterCommand {
   RegisterCommand(std::string order_key, std::function<void(CLI::App&)> add) {
     commandRegistry().push_back({std::move(order_key), std::move(add)});

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const ff::app::ExitStatus& e) {
+    return e.code;
   } catch (const ff::InputError& e) {
     std::cerr << "flowfusion: error: " << e.what() << '\n';
     return 2;

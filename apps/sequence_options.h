@@ -2,10 +2,12 @@
 // Options shared by the subcommands that read a sequence and configure the system
 // (`run`, `bench`): camera, depth scale, configuration file and per-setting overrides.
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "config_sources.h"
+#include "flowfusion/io/frame_source.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
 
@@ -40,6 +42,11 @@ struct SystemOptions {
     s.depth_scale = depth_scale;
     s.undistort = !no_undistort;
     return s;
+  }
+
+  // The frame source for `path` over --frames.
+  std::unique_ptr<FrameSource> openSource(const std::string& path) const {
+    return openFrameSource(path, sequenceOptions(), frames.empty() ? FrameRange{} : parseFrameRange(frames));
   }
 
   SystemConfig systemConfig() const {

@@ -65,8 +65,8 @@ double meanEpe(const cv::Mat& uv, const FlowPair& p) {
 void runFlow(benchmark::State& state, const std::string& backend, const std::string& preset) {
   const int width = static_cast<int>(state.range(0));
   ff::FlowConfig c;
-  c.backend = backend;
-  c.dis_preset = preset;
+  c.backend = ff::enumFromName<ff::FlowBackend>(backend);
+  c.dis_preset = ff::enumFromName<ff::DisPreset>(preset);
   c.downscale = static_cast<int>(state.range(1));
   const FlowPair p = makePair(width);
   auto flow = ff::makeOpticalFlow(c);
@@ -113,7 +113,7 @@ void runCluster(benchmark::State& state, const std::string& backend) {
   }
   const auto view = scene.render(ff::SE3::Identity());
   ff::ClusteringConfig c;
-  c.backend = backend;
+  c.backend = ff::enumFromName<ff::ClusteringBackend>(backend);
   if (state.range(2) > 0) c.kmeans_clusters = static_cast<int>(state.range(2));
   auto clusterer = ff::makeClusterer(c);
   ff::ClusterGraph g;

@@ -97,6 +97,7 @@ struct BagSpec {
   bool write_color = true, write_depth = true, camera_info = true;
   int depth_width = 0;           // 0: the folder's
   int swap_stamps = -1;          // colour stamps of messages k and k + 1 swapped
+  std::vector<double> distortion = std::vector<double>(5, 0.0);  // CameraInfo's plumb-bob k1 k2 p1 p2 k3
 };
 
 // `stamp` in the header, `received` as the bag's time (the order messages are read in).
@@ -155,7 +156,7 @@ void writeBag(const std::string& path, const BagSpec& spec) {
     info.width = f.camera.width;
     info.height = f.camera.height;
     info.distortion_model = "plumb_bob";
-    info.D.assign(5, 0.0);
+    info.D.assign(spec.distortion.begin(), spec.distortion.end());
     info.K = {f.camera.fx, 0, f.camera.cx, 0, f.camera.fy, f.camera.cy, 0, 0, 1};
     bag.write("/camera/rgb/camera_info", info.header.stamp, info);
   }
@@ -263,6 +264,30 @@ TEST(BagSource, TopicsAndRangeAreHonoured) {
   const std::string message = inputErrorOf([&] { BagSource bag(path, o); });
   EXPECT_NE(message.find("--rgb-topic /cam/front/missing"), std::string::npos) << message;
   EXPECT_NE(message.find("/cam/front/color (sensor_msgs/Image)"), std::string::npos) << message;
+}
+
+TEST(BagSource, CameraInfoDistortionIsUndistortedAsAFoldersCameraTxt) {
+  ff::testing::TempDir tmp;
+  const std::vector<double> d = {0.08, -0.15, 0.001, -0.002, 0.05};
+  const fs::path dir = tmp.path() / "distorted";
+  fs::copy(folder().dir, dir, fs::copy_options::recursive);
+  const CameraIntrinsics& c = folder().camera;
+  std::ofstream camera_txt(dir / "camera.txt");
+  camera_txt.precision(17);
+  camera_txt << c.fx << ' ' << c.fy << ' ' << c.cx << ' ' << c.cy << ' ' << c.width << ' ' << c.height;
+  for (double k : d) camera_txt << ' ' << k;
+  camera_txt.close();
+  const std::string path = (tmp.path() / "distorted.bag").string();
+  BagSpec spec;
+  spec.distortion = d;
+  writeBag(path, spec);
+  BagSource bag(path, bagOptions());
+  TumFolderSource folder_source(TumSequence::open(dir.string()));
+  EXPECT_DOUBLE_EQ(bag.reader().camera().distortion.k1, 0.08);
+  const cv::Mat mask(c.height, c.width, CV_8U, cv::Scalar(255));
+  EXPECT_EQ(cv::norm(bag.toRawPixels(mask), folder_source.toRawPixels(mask), cv::NORM_INF), 0);
+  EXPECT_GT(cv::norm(bag.toRawPixels(mask), mask, cv::NORM_INF), 0) << "the distortion should move pixels";
+  expectSameFrames(bag, folder_source, "rgb8", "distorted");
 }
 
 // Poses and masks of a whole run.

@@ -55,6 +55,21 @@ TEST(OutputFolder, OverwriteRemovesExactlyTheListedFiles) {
   EXPECT_EQ(all.find("masks/"), std::string::npos) << all;
 }
 
+TEST(OutputFolder, OverwriteReplacesOnlyTheSameCommandsOutput) {
+  testing::TempDir tmp;
+  setOutputCommand("synth");
+  prepareOutputDir(tmp.str(), false);
+  writeFileAtomic((tmp.path() / "rgb.txt").string(), "ours");
+  setOutputCommand("run");
+  const std::string msg = errorOf([&] { prepareOutputDir(tmp.str(), true); });
+  EXPECT_NE(msg.find("holds the output of 'flowfusion synth'"), std::string::npos) << msg;
+  EXPECT_TRUE(fs::exists(tmp.path() / "rgb.txt"));
+  setOutputCommand("synth");
+  prepareOutputDir(tmp.str(), true);
+  EXPECT_FALSE(fs::exists(tmp.path() / "rgb.txt"));
+  setOutputCommand("");
+}
+
 TEST(OutputFolder, WithoutManifestOverwriteKeepsEverything) {
   testing::TempDir tmp;
   std::ofstream(tmp.path() / "a.txt") << "x";

@@ -11,12 +11,13 @@
 namespace ff::eval {
 namespace {
 
-TEST(ReferenceOdometry, UnknownKindIsInputError) {
-  EXPECT_THROW(ReferenceOdometry("orb", *freiburgPreset(1)), InputError);
+TEST(ReferenceOdometry, MethodsAreNamedAsInTheBenchTable) {
+  EXPECT_EQ(methodName(ReferenceMethod::RgbdOdometry), "opencv-RgbdOdometry");
+  EXPECT_EQ(methodName(ReferenceMethod::RgbdIcpOdometry), "opencv-RgbdICPOdometry");
 }
 
 TEST(ReferenceOdometry, WrongFrameSizeIsInputError) {
-  ReferenceOdometry odometry("rgbd", *freiburgPreset(1));
+  ReferenceOdometry odometry(ReferenceMethod::RgbdOdometry, *freiburgPreset(1));
   RgbdFrame frame;
   frame.name = "small.png";
   frame.intensity = cv::Mat(120, 160, CV_32FC1, cv::Scalar(0.5));
@@ -24,7 +25,7 @@ TEST(ReferenceOdometry, WrongFrameSizeIsInputError) {
   EXPECT_THROW(odometry.track(frame), InputError);
 }
 
-class ReferenceOdometryOnFr1Xyz : public ::testing::TestWithParam<const char*> {};
+class ReferenceOdometryOnFr1Xyz : public ::testing::TestWithParam<ReferenceMethod> {};
 
 // 30 frames (1 s) of fr1/xyz: the camera moves about 10 cm; frame-to-frame OpenCV odometry
 // follows it to within a couple of centimetres (it reaches 3.3 cm ATE over the whole sequence).
@@ -46,12 +47,13 @@ TEST_P(ReferenceOdometryOnFr1Xyz, FollowsTheGroundTruthMotion) {
     travelled_m = std::max(travelled_m, (T_world_gt.translation() - T_world_first_gt.translation()).norm());
   }
   EXPECT_GT(travelled_m, 0.05);
-  EXPECT_LT(max_error_m, 0.03) << GetParam();
+  EXPECT_LT(max_error_m, 0.03) << methodName(GetParam());
   const auto ate = computeAte(*sequence.groundtruth(), run.trajectory);
-  EXPECT_LT(ate.translation_m.rmse, 0.02) << GetParam();
+  EXPECT_LT(ate.translation_m.rmse, 0.02) << methodName(GetParam());
 }
 
-INSTANTIATE_TEST_SUITE_P(Kinds, ReferenceOdometryOnFr1Xyz, ::testing::Values("rgbd", "icp"));
+INSTANTIATE_TEST_SUITE_P(Methods, ReferenceOdometryOnFr1Xyz,
+                         ::testing::Values(ReferenceMethod::RgbdOdometry, ReferenceMethod::RgbdIcpOdometry));
 
 // A textured fronto-parallel wall 1.5 m away, seen by a 160x120 camera.
 RgbdFrame wallFrame(double t, double shift_px, bool with_depth) {
@@ -69,7 +71,7 @@ RgbdFrame wallFrame(double t, double shift_px, bool with_depth) {
 
 TEST(ReferenceOdometry, FailedFrameRepeatsThePreviousMotion) {
   const CameraIntrinsics camera{130, 130, 79.5, 59.5, 160, 120};
-  ReferenceOdometry odometry("rgbd", camera);
+  ReferenceOdometry odometry(ReferenceMethod::RgbdOdometry, camera);
   odometry.track(wallFrame(0.0, 0, true));
   odometry.track(wallFrame(0.1, 0, true));
   odometry.track(wallFrame(0.2, 0, false));  // no depth: nothing to align

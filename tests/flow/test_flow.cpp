@@ -38,29 +38,31 @@ SE3 cameraMotion() {
 }
 
 TEST(OpticalFlowFactory, UnknownNamesAreInputErrors) {
-  FlowConfig c;
-  c.backend = "pwcnet";
+  nlohmann::json j = FlowConfig{};
+  j["backend"] = "pwcnet";
   try {
-    makeOpticalFlow(c);
+    j.get<FlowConfig>();
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("flow.backend"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("dis"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("farneback"), std::string::npos) << e.what();
   }
-  c = FlowConfig{};
-  c.dis_preset = "slow";
-  EXPECT_THROW(makeOpticalFlow(c), InputError);
-  c = FlowConfig{};
+  j = FlowConfig{};
+  j["dis_preset"] = "slow";
+  EXPECT_THROW(j.get<FlowConfig>(), InputError);
+  FlowConfig c;
   c.downscale = 3;
   EXPECT_THROW(makeOpticalFlow(c), InputError);
 }
 
 TEST(OpticalFlowFactory, ConfigRoundTripsThroughJson) {
   FlowConfig c;
-  c.backend = "farneback";
+  c.backend = FlowBackend::Farneback;
   c.downscale = 4;
+  EXPECT_EQ(nlohmann::json(c)["backend"], "farneback");
   const FlowConfig back = nlohmann::json(c).get<FlowConfig>();
-  EXPECT_EQ(back.backend, "farneback");
+  EXPECT_EQ(back.backend, FlowBackend::Farneback);
   EXPECT_EQ(back.downscale, 4);
   EXPECT_EQ(back.dis_preset, FlowConfig{}.dis_preset);
 }
@@ -138,7 +140,7 @@ TEST_F(FlowOnAnalyticScene, MovingObjectGivesLargeResidualOnItsPixels) {
   const SE3 T_world_b = cameraMotion();
   const auto a = scene.render(SE3::Identity());
   const auto b = scene.render(T_world_b, Eigen::Vector3d(0.07, 0.0, 0.0));  // ~12 px at 320x240
-  for (const std::string backend : {"dis", "farneback"}) {
+  for (const FlowBackend backend : {FlowBackend::Dis, FlowBackend::Farneback}) {
     FlowConfig c;
     c.backend = backend;
     const FlowField of = makeOpticalFlow(c)->compute(a.frame.intensity, b.frame.intensity);
@@ -147,8 +149,8 @@ TEST_F(FlowOnAnalyticScene, MovingObjectGivesLargeResidualOnItsPixels) {
     cv::erode(a.mask, inner, cv::Mat::ones(9, 9, CV_8U));
     const double on_box = medianOf(valuesWhere(r, inner, 255));
     const double background = medianOf(valuesWhere(r, a.mask, 0, 8));
-    EXPECT_GT(on_box, 6.0) << backend;
-    EXPECT_LT(background, 0.6) << backend;
+    EXPECT_GT(on_box, 6.0) << enumName(backend);
+    EXPECT_LT(background, 0.6) << enumName(backend);
   }
 }
 

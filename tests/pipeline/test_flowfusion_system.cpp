@@ -1,6 +1,6 @@
 // End-to-end checks of FlowFusionSystem on synthetic sequences with exact ground truth (poses and
 // dynamic masks): a static room must stay static and be tracked well, moving objects must be
-// segmented and must not spoil the trajectory, and runSequence must write its files.
+// segmented and must not spoil the trajectory.
 //
 // Small images (320x240) and 40 frames keep the file within CI's budget (2 cores).
 #include <gtest/gtest.h>
@@ -8,13 +8,13 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <vector>
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
-#include "flowfusion/pipeline/run_sequence.h"
 #include "flowfusion/synth/synthetic_scene.h"
 #include "testing/test_util.h"
 
@@ -76,10 +76,11 @@ RunResult runOn(const synth::SyntheticScene& scene, const SystemConfig& config) 
   return out;
 }
 
-RunResult runOn(const synth::SyntheticScene& scene, bool segmentation, const std::string& tracking = {}) {
+RunResult runOn(const synth::SyntheticScene& scene, bool segmentation,
+                std::optional<TrackingMode> tracking = std::nullopt) {
   SystemConfig config;
   config.pipeline.segmentation = segmentation;
-  if (!tracking.empty()) config.pipeline.tracking = tracking;
+  if (tracking) config.pipeline.tracking = *tracking;
   return runOn(scene, config);
 }
 
@@ -98,7 +99,7 @@ const RunResult& dynamicRunNoSegmentation() {
 }
 
 TEST(FlowFusionSystem, FrameToModelTracksAgainstTheMap) {
-  const RunResult r = runOn(synth::SyntheticScene(smallScene(0)), true, "frame_to_model");
+  const RunResult r = runOn(synth::SyntheticScene(smallScene(0)), true, TrackingMode::FrameToModel);
   std::cout << "frame to model: " << r.model_frames << " of 39 frames aligned to the map, ATE "
             << 1e3 * r.ate_rmse_m << " mm\n";
   // Measured: 39 of 39, ATE 1.6 mm (9.4 mm when the prediction kept the nearest disc intersection
@@ -166,36 +167,6 @@ TEST(FlowFusionSystem, ALargeObjectMovingFromTheFirstFrameDoesNotCaptureTheOdome
   EXPECT_GT(off.ate_rmse_m, 2 * on.ate_rmse_m);
 }
 
-TEST(RunSequence, WritesResultsAndRefusesANonEmptyFolder) {
-  testing::TempDir tmp;
-  synth::SynthConfig sc = smallScene(1);
-  sc.frames = 8;
-  const synth::SyntheticScene scene(sc);
-  const std::string seq_dir = (tmp.path() / "seq").string();
-  synth::writeSequence(scene, seq_dir);
-  const TumSequence sequence = TumSequence::open(seq_dir);
-  ASSERT_EQ(sequence.size(), 8u);
-
-  RunOptions options;
-  options.out_dir = (tmp.path() / "out").string();
-  const RunSummary summary = runSequence(sequence, SystemConfig{}, options);
-  EXPECT_EQ(summary.frames, 8u);
-  EXPECT_EQ(summary.trajectory.size(), 8u);
-
-  const fs::path out = options.out_dir;
-  for (const char* name : {"trajectory.txt", "config.json", "timings.csv", "map.ply", "map_points.ply"}) {
-    EXPECT_TRUE(fs::is_regular_file(out / name)) << name;
-    EXPECT_GT(fs::file_size(out / name), 0u) << name;
-  }
-  ASSERT_TRUE(fs::is_directory(out / "masks"));
-  int pngs = 0;
-  for (const auto& e : fs::directory_iterator(out / "masks")) pngs += e.path().extension() == ".png";
-  EXPECT_EQ(pngs, 8);
-  EXPECT_EQ(readTrajectory((out / "trajectory.txt").string()).size(), 8u);
-
-  EXPECT_THROW(runSequence(sequence, SystemConfig{}, options), InputError);
-}
-
 TEST(SystemConfig, BadSettingsAreRejectedByName) {
   auto rejects = [](auto&& edit, const std::string& name) {
     SystemConfig c;
@@ -207,7 +178,8 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   };
-  rejects([](SystemConfig& c) { c.pipeline.tracking = "icp"; }, "pipeline.tracking");
+  rejects([](SystemConfig& c) { c.pipeline.tracking = TrackingMode::FrameToModel, c.pipeline.fusion = false; },
+          "pipeline.tracking");
   rejects([](SystemConfig& c) { c.scores.theta_t = c.scores.theta_b; }, "scores.theta_t");
   rejects([](SystemConfig& c) { c.scores.alpha_M = -1; }, "scores.alpha_M");
   rejects([](SystemConfig& c) { c.scores.model_margin = -0.1; }, "scores.model_margin");
@@ -218,6 +190,15 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
   rejects([](SystemConfig& c) { c.pipeline.fusion_every = 0; }, "pipeline.fusion_every");
   rejects([](SystemConfig& c) { c.consensus.ransac_iterations = 0; }, "consensus.ransac_iterations");
   EXPECT_NO_THROW(validate(SystemConfig{}));
+  nlohmann::json j = SystemConfig{};
+  j["pipeline"]["tracking"] = "icp";
+  try {
+    j.get<SystemConfig>();
+    ADD_FAILURE() << "pipeline.tracking icp was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_to_frame, frame_to_keyframe or frame_to_model"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

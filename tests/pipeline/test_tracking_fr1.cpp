@@ -7,15 +7,16 @@
 
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/io/tum_sequence.h"
-#include "flowfusion/pipeline/run_sequence.h"
+#include "flowfusion/io/tum_folder_source.h"
+#include "flowfusion/pipeline/run.h"
 #include "testing/test_util.h"
 
 namespace ff {
 namespace {
 
 double ateOn(const TumSequence& sequence, const SystemConfig& config) {
-  RunOptions options;  // no out_dir: nothing written
-  const RunSummary s = runSequence(sequence, config, options);
+  TumFolderSource source(sequence);
+  const RunSummary s = runSequence(source, config, {});
   return eval::computeAte(*sequence.groundtruth(), s.trajectory).translation_m.rmse;
 }
 
@@ -26,7 +27,7 @@ TEST(TrackingOnFr1Xyz, ModelKeyframesBeatFrameKeyframesAndFrameToFrame) {
   SystemConfig model_keyframes, frame_keyframes, frame_to_frame;
   ASSERT_TRUE(model_keyframes.pipeline.model_keyframes) << "the default this test is about";
   frame_keyframes.pipeline.model_keyframes = false;
-  frame_to_frame.pipeline.tracking = "frame_to_frame";
+  frame_to_frame.pipeline.tracking = TrackingMode::FrameToFrame;
   const double model = ateOn(sequence, model_keyframes);
   const double keyframes = ateOn(sequence, frame_keyframes);
   const double frames = ateOn(sequence, frame_to_frame);

@@ -13,21 +13,22 @@ namespace {
 using testing::AnalyticScene;
 
 TEST(ClustererFactory, UnknownBackendIsInputError) {
-  ClusteringConfig c;
-  c.backend = "slic";
+  nlohmann::json j = ClusteringConfig{};
+  j["backend"] = "slic";
   try {
-    makeClusterer(c);
+    j.get<ClusteringConfig>();
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("clustering.backend"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("kmeans"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("supervoxel"), std::string::npos) << e.what();
   }
-  c = ClusteringConfig{};
+  ClusteringConfig c;
   c.kmeans_clusters = 0;
   EXPECT_THROW(makeClusterer(c), InputError);
 }
 
-class ClusteringBackends : public ::testing::TestWithParam<std::string> {
+class ClusteringBackends : public ::testing::TestWithParam<ClusteringBackend> {
  protected:
   std::unique_ptr<Clusterer> make() {
     ClusteringConfig c;
@@ -114,7 +115,9 @@ TEST_P(ClusteringBackends, ObjectIsCoveredByClustersThatStayInside) {
   EXPECT_GT(covered, 0.9 * box_pixels) << covered << " of " << box_pixels;
 }
 
-INSTANTIATE_TEST_SUITE_P(Backends, ClusteringBackends, ::testing::Values("kmeans", "supervoxel"));
+INSTANTIATE_TEST_SUITE_P(Backends, ClusteringBackends,
+                         ::testing::Values(ClusteringBackend::KMeans, ClusteringBackend::Supervoxel),
+                         [](const auto& info) { return enumName(info.param); });
 
 TEST(Clustering, RejectsBadInput) {
   auto c = makeClusterer(ClusteringConfig{});
@@ -129,12 +132,12 @@ TEST(Clustering, NoDepthGivesNoClusters) {
   RgbdFrame f;
   f.depth = cv::Mat(60, 80, CV_32F, cv::Scalar(0.0f));
   f.intensity = cv::Mat(60, 80, CV_32F, cv::Scalar(0.5f));
-  for (const std::string backend : {"kmeans", "supervoxel"}) {
+  for (const ClusteringBackend backend : {ClusteringBackend::KMeans, ClusteringBackend::Supervoxel}) {
     ClusteringConfig c;
     c.backend = backend;
     const ClusterGraph g = makeClusterer(c)->cluster(f, CameraIntrinsics{60, 60, 40, 30, 80, 60});
-    EXPECT_EQ(g.num_clusters, 0) << backend;
-    EXPECT_TRUE(g.edges.empty()) << backend;
+    EXPECT_EQ(g.num_clusters, 0) << enumName(backend);
+    EXPECT_TRUE(g.edges.empty()) << enumName(backend);
   }
 }
 

@@ -20,10 +20,6 @@ struct PyramidLevel {
   cv::Mat grad_x, grad_y;   // intensity gradients (per pixel, central differences)
   cv::Mat dgrad_x, dgrad_y; // depth gradients (metres per pixel, 0 where a neighbour is invalid)
   CameraIntrinsics camera;
-  // How far each pixel may serve as the target of an alignment, CV_32FC1 in [0, 1] (1 - dynamic
-  // score), or empty for all 1: a moving object in the target must not attract the pixels of the
-  // background it covered.
-  cv::Mat target_weight;
 };
 
 // Builds `levels` levels; gradients only from `first_gradient_level` up, since levels finer

@@ -23,6 +23,7 @@ namespace {
 // The folder whose writes are listed, and what its manifest lists already.
 struct Recording {
   std::mutex mutex;
+  std::string command;  // setOutputCommand's, "" = not named
   fs::path dir;  // weakly canonical; empty = not recording
   std::set<std::string> listed;
 };
@@ -56,11 +57,22 @@ void appendLine(const fs::path& file, const std::string& line) {
   if (!ok) throw InputError(file.string() + ": cannot write: " + std::strerror(err));
 }
 
+constexpr const char* kHeader =
+    "# Files flowfusion wrote into this folder; --overwrite removes exactly these. Command: ";
+
 // Removes the files the manifest lists (regular files inside dir only), then the folders that
-// held them when they are left empty, then the manifest.
-void removeListedFiles(const fs::path& dir) {
+// held them when they are left empty, then the manifest. Refuses another command's manifest.
+void removeListedFiles(const fs::path& dir, const std::string& command) {
   const fs::path manifest = dir / kManifestName;
   std::ifstream in(manifest);
+  if (!in) return;
+  std::string header;
+  std::getline(in, header);
+  const std::string previous = header.rfind(kHeader, 0) == 0 ? header.substr(std::string(kHeader).size()) : "";
+  if (!previous.empty() && !command.empty() && previous != command)
+    throw InputError(dir.string() + ": holds the output of 'flowfusion " + previous +
+                     "'; --overwrite replaces only the output of the same command ('" + command +
+                     "'): choose another folder");
   std::set<fs::path> parents;
   std::error_code ec;
   for (std::string line; std::getline(in, line);) {
@@ -84,23 +96,32 @@ void removeListedFiles(const fs::path& dir) {
 
 void prepareOutputDir(const std::string& dir, bool overwrite) {
   if (dir.empty()) throw InputError("the output folder name is empty");
+  Recording& r = recording();
+  const std::string command = [&r] {
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    return r.command;
+  }();
   const fs::path p(dir);
   std::error_code ec;
   if (fs::exists(p, ec)) {
     if (!fs::is_directory(p, ec)) throw InputError(dir + ": output path exists and is not a folder");
     if (!fs::is_empty(p, ec)) {
       if (!overwrite) throw InputError(dir + ": output folder is not empty; choose another or pass --overwrite");
-      removeListedFiles(p);
+      removeListedFiles(p, command);
     }
   }
   fs::create_directories(p, ec);
   if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
-  writeFileAtomic((p / kManifestName).string(),
-                  "# Files flowfusion wrote into this folder; --overwrite removes exactly these.\n", "manifest");
-  Recording& r = recording();
+  writeFileAtomic((p / kManifestName).string(), kHeader + command + "\n", "manifest");
   const std::lock_guard<std::mutex> lock(r.mutex);
   r.dir = fs::weakly_canonical(p);
   r.listed.clear();
+}
+
+void setOutputCommand(const std::string& command) {
+  Recording& r = recording();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  r.command = command;
 }
 
 void refuseOverlap(const std::string& out_dir, const std::string& input, const std::string& what) {

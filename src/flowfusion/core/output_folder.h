@@ -10,11 +10,15 @@ namespace ff {
 
 inline constexpr const char* kManifestName = ".flowfusion-manifest";
 
+// Names the command whose output prepareOutputDir prepares ("run", "synth"): the manifest records
+// it, and --overwrite replaces only the output of the same command. Executables set it once.
+void setOutputCommand(const std::string& command);
+
 // Makes `dir` ready for results and starts listing the files written under it in its manifest.
 // A missing folder is created; an empty one is accepted; a non-empty one is an InputError unless
 // `overwrite` is set, and then the files its manifest lists are removed (with folders they leave
 // empty) while everything else stays (a folder without a manifest keeps all its files; those the
-// command writes again are replaced).
+// command writes again are replaced). A manifest written by another command is an InputError.
 void prepareOutputDir(const std::string& dir, bool overwrite);
 
 // InputError when the output folder is, contains or lies inside `input` (a folder or a file;

@@ -15,16 +15,20 @@ struct ReferenceOdometry::Impl {
   cv::Ptr<cv::rgbd::OdometryFrame> previous;
 };
 
-ReferenceOdometry::ReferenceOdometry(const std::string& kind, const CameraIntrinsics& camera,
-                                     const SE3& T_world_first)
-    : impl_(std::make_unique<Impl>()), kind_(kind), camera_(camera), T_world_first_(T_world_first) {
+std::string methodName(ReferenceMethod method) {
+  return method == ReferenceMethod::RgbdOdometry ? "opencv-RgbdOdometry" : "opencv-RgbdICPOdometry";
+}
+
+ReferenceOdometry::ReferenceOdometry(ReferenceMethod method, const CameraIntrinsics& camera, const SE3& T_world_first)
+    : impl_(std::make_unique<Impl>()), method_(method), camera_(camera), T_world_first_(T_world_first) {
   if (!camera.valid()) throw InputError("reference odometry: camera intrinsics are not valid");
   cv::Mat K;
   cv::eigen2cv(camera.K(), K);
   K.convertTo(K, CV_32F);
-  if (kind == "rgbd") impl_->odometry = cv::rgbd::RgbdOdometry::create(K);
-  else if (kind == "icp") impl_->odometry = cv::rgbd::RgbdICPOdometry::create(K);
-  else throw InputError("reference odometry kind '" + kind + "': expected 'rgbd' or 'icp'");
+  if (method == ReferenceMethod::RgbdOdometry)
+    impl_->odometry = cv::rgbd::RgbdOdometry::create(K);
+  else
+    impl_->odometry = cv::rgbd::RgbdICPOdometry::create(K);
 }
 
 ReferenceOdometry::~ReferenceOdometry() = default;
@@ -64,14 +68,14 @@ SE3 ReferenceOdometry::track(const RgbdFrame& frame) {
 
 double ReferenceOdometry::medianMs() const { return median(call_ms_); }
 
-ReferenceRun runReferenceOdometry(const std::string& kind, const TumSequence& sequence,
+ReferenceRun runReferenceOdometry(ReferenceMethod method, const TumSequence& sequence,
                                   std::optional<size_t> max_frames) {
   const size_t n = std::min(sequence.size(), max_frames.value_or(sequence.size()));
   if (n == 0) throw InputError(sequence.dir() + ": no frames to run the reference odometry on");
   const RgbdFrame first = sequence.load(0);
   SE3 T_world_first = SE3::Identity();
   if (sequence.groundtruth()) interpolatePose(*sequence.groundtruth(), first.timestamp, T_world_first);
-  ReferenceOdometry odometry(kind, sequence.camera(), T_world_first);
+  ReferenceOdometry odometry(method, sequence.camera(), T_world_first);
   odometry.track(first);
   for (size_t i = 1; i < n; ++i) odometry.track(sequence.load(i));
   return {odometry.trajectory(), odometry.failures(), odometry.medianMs()};

@@ -18,12 +18,18 @@ class TumSequence;
 
 namespace ff::eval {
 
+// OpenCV's odometries, the peers `bench` measures against.
+enum class ReferenceMethod {
+  RgbdOdometry,     // cv::rgbd::RgbdOdometry (photometric)
+  RgbdIcpOdometry,  // cv::rgbd::RgbdICPOdometry (photometric + ICP)
+};
+// "opencv-RgbdOdometry" or "opencv-RgbdICPOdometry", as bench's table names them.
+std::string methodName(ReferenceMethod method);
+
 class ReferenceOdometry {
  public:
-  // kind: "rgbd" (cv::rgbd::RgbdOdometry) or "icp" (cv::rgbd::RgbdICPOdometry); anything else is
-  // an InputError. The first tracked frame gets T_world_first.
-  ReferenceOdometry(const std::string& kind, const CameraIntrinsics& camera,
-                    const SE3& T_world_first = SE3::Identity());
+  // The first tracked frame gets T_world_first.
+  ReferenceOdometry(ReferenceMethod method, const CameraIntrinsics& camera, const SE3& T_world_first = SE3::Identity());
   ~ReferenceOdometry();
   ReferenceOdometry(const ReferenceOdometry&) = delete;
   ReferenceOdometry& operator=(const ReferenceOdometry&) = delete;
@@ -39,12 +45,12 @@ class ReferenceOdometry {
   // Wall time of each odometry call (frame preparation included), ms; one per frame after the first.
   const std::vector<double>& callMs() const { return call_ms_; }
   double medianMs() const;
-  const std::string& kind() const { return kind_; }
+  ReferenceMethod method() const { return method_; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  std::string kind_;
+  ReferenceMethod method_;
   CameraIntrinsics camera_;
   SE3 T_world_first_;
   SE3 T_prev_cur_ = SE3::Identity();  // last frame-to-frame motion, for failures
@@ -62,7 +68,7 @@ struct ReferenceRun {
 // Runs ReferenceOdometry over the first max_frames frames of a sequence (all when nullopt),
 // starting at the ground-truth pose of the first frame when the sequence has ground truth
 // within 0.02 s, else at identity.
-ReferenceRun runReferenceOdometry(const std::string& kind, const TumSequence& sequence,
+ReferenceRun runReferenceOdometry(ReferenceMethod method, const TumSequence& sequence,
                                   std::optional<size_t> max_frames = std::nullopt);
 
 }  // namespace ff::eval

@@ -99,4 +99,16 @@ FlowMotion estimateFlowMotion(const FlowCorrespondences& c, const CameraIntrinsi
   return m;
 }
 
+std::optional<SE3> flowConsensusMotion(const FlowField& flow, const cv::Mat& depth_a, const CameraIntrinsics& camera,
+                                       const SE3& T_b_a_odometry, const ConsensusConfig& config) {
+  const FlowCorrespondences c = sampleFlowCorrespondences(flow, depth_a, camera, config.grid_step);
+  const double n = static_cast<double>(c.size());
+  const int explained = countFlowInliers(c, camera, T_b_a_odometry, config.inlier_px);
+  // RANSAC cannot win by min_gain when the odometry already explains this much.
+  if (explained >= (1.0 - config.min_gain) * n) return std::nullopt;
+  const FlowMotion m = estimateFlowMotion(c, camera, config);
+  if (!m.ok || m.inliers < explained + config.min_gain * n) return std::nullopt;
+  return m.T_b_a;
+}
+
 }  // namespace ff

@@ -10,6 +10,7 @@
 // odometry's motion, the odometry is restarted from it (pipeline/segmentation_loop.h).
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "flowfusion/core/camera.h"
@@ -60,5 +61,10 @@ struct FlowMotion {
 // RANSAC (P3P hypotheses, refined on the inliers) over the correspondences.
 FlowMotion estimateFlowMotion(const FlowCorrespondences& c, const CameraIntrinsics& camera,
                               const ConsensusConfig& config);
+
+// The flow's rigid motion T_b_a when it explains at least config.min_gain of the sampled flow
+// more than `T_b_a_odometry` does; none otherwise (what the system restarts its odometry from).
+std::optional<SE3> flowConsensusMotion(const FlowField& flow, const cv::Mat& depth_a, const CameraIntrinsics& camera,
+                                       const SE3& T_b_a_odometry, const ConsensusConfig& config);
 
 }  // namespace ff

@@ -1,6 +1,7 @@
 #include "flowfusion/flow/optical_flow.h"
 
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 #include <opencv2/video/tracking.hpp>
 
 #include "flowfusion/core/error.h"
@@ -8,12 +9,6 @@
 namespace ff {
 
 namespace {
-
-std::string joined(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
 
 void checkInputs(const cv::Mat& a, const cv::Mat& b, const std::string& who) {
   if (a.empty() || b.empty()) throw InputError(who + ": empty input image");
@@ -55,26 +50,25 @@ class OpenCvFlow : public OpticalFlow {
 
 }  // namespace
 
-std::vector<std::string> opticalFlowBackends() { return {"dis", "farneback"}; }
+void validate(const FlowConfig& config) {
+  if (config.downscale != 1 && config.downscale != 2 && config.downscale != 4)
+    throw InputError("flow.downscale must be 1, 2 or 4, got " + std::to_string(config.downscale));
+}
 
 std::unique_ptr<OpticalFlow> makeOpticalFlow(const FlowConfig& config) {
-  if (config.downscale != 1 && config.downscale != 2 && config.downscale != 4)
-    throw InputError("flow.downscale: " + std::to_string(config.downscale) + " is not 1, 2 or 4");
-  if (config.backend == "dis") {
-    int preset;
-    if (config.dis_preset == "ultrafast") preset = cv::DISOpticalFlow::PRESET_ULTRAFAST;
-    else if (config.dis_preset == "fast") preset = cv::DISOpticalFlow::PRESET_FAST;
-    else if (config.dis_preset == "medium") preset = cv::DISOpticalFlow::PRESET_MEDIUM;
-    else
-      throw InputError("flow.dis_preset: unknown preset '" + config.dis_preset +
-                       "' (valid: ultrafast, fast, medium)");
-    return std::make_unique<OpenCvFlow>(cv::DISOpticalFlow::create(preset), "dis-" + config.dis_preset,
-                                        config.downscale);
+  validate(config);
+  switch (config.backend) {
+    case FlowBackend::Dis: {
+      const int preset = config.dis_preset == DisPreset::Ultrafast ? cv::DISOpticalFlow::PRESET_ULTRAFAST
+                         : config.dis_preset == DisPreset::Fast    ? cv::DISOpticalFlow::PRESET_FAST
+                                                                   : cv::DISOpticalFlow::PRESET_MEDIUM;
+      return std::make_unique<OpenCvFlow>(cv::DISOpticalFlow::create(preset), "dis-" + enumName(config.dis_preset),
+                                          config.downscale);
+    }
+    case FlowBackend::Farneback:
+      return std::make_unique<OpenCvFlow>(cv::FarnebackOpticalFlow::create(), "farneback", config.downscale);
   }
-  if (config.backend == "farneback")
-    return std::make_unique<OpenCvFlow>(cv::FarnebackOpticalFlow::create(), "farneback", config.downscale);
-  throw InputError("flow.backend: unknown optical flow backend '" + config.backend +
-                   "' (valid: " + joined(opticalFlowBackends()) + ")");
+  throw std::logic_error("makeOpticalFlow: unhandled flow.backend");
 }
 
 FlowField resizeFlow(const FlowField& flow, cv::Size size) {

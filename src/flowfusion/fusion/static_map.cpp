@@ -166,7 +166,7 @@ enum class Action : uint8_t { kNone, kMerge, kAdd, kDynamic };
 
 }  // namespace
 
-void validateFusionConfig(const FusionConfig& c) {
+void validate(const FusionConfig& c) {
   requireRange(c.integration_stride >= 1 && c.integration_stride <= 8, "integration_stride", "in 1..8");
   requireRange(c.min_depth_m > 0 && c.max_depth_m > c.min_depth_m, "min_depth_m/max_depth_m",
                "positive with min_depth_m < max_depth_m");
@@ -187,7 +187,7 @@ void validateFusionConfig(const FusionConfig& c) {
                "positive with mesh_truncation_m > mesh_voxel_m");
 }
 
-StaticMap::StaticMap(const FusionConfig& config) : config_(config) { validateFusionConfig(config_); }
+StaticMap::StaticMap(const FusionConfig& config) : config_(config) { validate(config_); }
 
 void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                           const cv::Mat& static_weight) {

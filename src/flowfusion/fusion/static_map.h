@@ -79,7 +79,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FusionConfig, integration_stride
                                                 mesh_voxel_m, mesh_truncation_m)
 
 // Throws InputError naming the setting when a value is out of range.
-void validateFusionConfig(const FusionConfig& config);
+void validate(const FusionConfig& config);
 
 // The model seen from one camera. Pixels the model does not cover hold 0 in every image.
 struct ModelPrediction {
@@ -168,15 +168,5 @@ class StaticMap {
   int frame_index_ = 0;
   bool budget_reached_ = false;
 };
-
-// Shaded view of the map (surfel colours times a headlight Lambert term) at T_world_cam; background
-// black. CV_8UC3 BGR of the camera's size.
-cv::Mat renderPreview(const StaticMap& map, const SE3& T_world_cam, const CameraIntrinsics& camera);
-// Writes preview_<i>.png into `dir` (created if needed) from a few viewpoints around the map: the
-// first keyframe and views orbiting the map's centre. Returns the paths written.
-std::vector<std::string> writePreviews(const StaticMap& map, const std::string& dir);
-// Colour frame with the dynamic pixels tinted red. mask: CV_8UC1 (non-zero = dynamic) or CV_32FC1
-// (dynamic score in [0, 1]), same size as bgr.
-cv::Mat overlayMask(const cv::Mat& bgr, const cv::Mat& mask);
 
 }  // namespace ff

@@ -169,112 +169,117 @@ inline bool hiddenInTarget(float zB, float qz, float ratio) { return ratio > 0 &
 
 constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
 
-}  // namespace
-
-void setTargetWeights(OdometryFrame& frame, const cv::Mat& weights) {
-  for (PyramidLevel& level : frame.pyramid)
-    level.target_weight = weights.empty() || level.depth.empty() ? cv::Mat() : weightsAtLevel(weights, level.depth.size());
+// The normal equations of one Gauss-Newton iteration at one level under T (target <- source),
+// summed over fixed row stripes so that the result does not depend on the thread count.
+Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
+                            const SE3& T, const OdometryConfig& c) {
+  const CameraIntrinsics& cam = A.camera;
+  const float cI = static_cast<float>(c.cauchy_c), inv_c2 = 1.0f / (cI * cI);
+  const float sI = static_cast<float>(c.alpha_I / c.sigma_I);
+  const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
+  const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
+  const float slope_sigma = static_cast<float>(c.depth_slope_sigma);
+  const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
+  const float occlusion = static_cast<float>(c.occlusion_ratio);
+  const Eigen::Matrix3f R = T.rotation().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  std::array<Accumulator, kStripes> acc{};
+  const int rows = A.depth.rows;
+  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+    for (int s = range.start; s < range.end; ++s) {
+      Accumulator& a = acc[s];
+      const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
+      for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) {
+        const float* dA = A.depth.ptr<float>(y);
+        const float* iA = A.intensity.ptr<float>(y);
+        const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
+        for (int x = 1; x < A.depth.cols - 1; ++x) {
+          const float z = dA[x];
+          if (!(z >= zmin && z <= zmax)) continue;
+          float v_pix = wr ? wr[x] : 1.0f;
+          if (v_pix <= 0) continue;
+          const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
+          Warp w;
+          if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
+          v_pix *= targetWeight(wB, w);
+          if (v_pix <= 0) continue;
+          const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+          if (hiddenInTarget(zB, w.qz, occlusion)) continue;
+          // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
+          const float iz = 1.0f / w.qz, iz2 = iz * iz;
+          const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
+                               fx * (1 + w.qx * w.qx * iz2), -fx * w.qy * iz};
+          const float Jv[6] = {0, fy * iz, -fy * w.qy * iz2, -fy * (1 + w.qy * w.qy * iz2),
+                               fy * w.qx * w.qy * iz2, fy * w.qx * iz};
+          bool used = false;
+          if (c.use_intensity) {
+            const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
+            const float gx = bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI;
+            const float gy = bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI;
+            float J[6];
+            for (int k = 0; k < 6; ++k) J[k] = gx * Ju[k] + gy * Jv[k];
+            const float q = r * r * inv_c2;
+            a.add(J, r, v_pix / (1 + q));
+            a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
+            used = true;
+          }
+          if (c.use_depth && zB > 0) {
+            const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
+            const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
+            const float slope = std::sqrt(gx * gx + gy * gy);
+            const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
+            const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
+            const float inv_s = 1.0f / sigma;
+            const float r = (zB - w.qz) * inv_s;
+            // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
+            const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
+            float J[6];
+            for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
+            const float q = r * r * inv_c2;
+            a.add(J, r, v_pix / (1 + q));
+            a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
+            used = true;
+          }
+          if (used) ++a.count;
+        }
+        a.flushRow();
+      }
+    }
+  });
+  Accumulator total;
+  for (const auto& a : acc) total.merge(a);
+  return total;
 }
+
+}  // namespace
 
 DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { validate(config_); }
 
-OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_init,
-                                       const cv::Mat& weights, int coarsest_level) const {
+OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const OdometryFrame& target, const SE3& T_init,
+                                       const cv::Mat& source_weights, const cv::Mat& target_weights,
+                                       int coarsest_level) const {
   const OdometryConfig& c = config_;
   OdometryResult result;
-  result.T_cur_ref = T_init;
-  if (ref.pyramid.size() < static_cast<size_t>(c.levels) || cur.pyramid.size() < static_cast<size_t>(c.levels)) {
+  result.T_target_source = T_init;
+  if (source.pyramid.size() < static_cast<size_t>(c.levels) || target.pyramid.size() < static_cast<size_t>(c.levels)) {
     result.message = "frames were prepared with fewer pyramid levels than configured";
     return result;
   }
   SE3 T = T_init;
-  const float cI = static_cast<float>(c.cauchy_c), inv_c2 = 1.0f / (cI * cI);
-  const float sI = static_cast<float>(c.alpha_I / c.sigma_I);
   Matrix6d H_last = Matrix6d::Zero();
 
   const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
   for (int level = start_level; level >= c.finest_level; --level) {
-    const PyramidLevel& A = ref.level(level);
-    const PyramidLevel& B = cur.level(level);
-    const CameraIntrinsics& cam = A.camera;
-    const cv::Mat wimg = weightsAtLevel(weights, A.depth.size());
-    const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
-    const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
-    const float slope_sigma = static_cast<float>(c.depth_slope_sigma);
-    const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
-    const float occlusion = static_cast<float>(c.occlusion_ratio);
+    const PyramidLevel& A = source.level(level);
+    const PyramidLevel& B = target.level(level);
+    const cv::Mat wimg = weightsAtLevel(source_weights, A.depth.size());
+    const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
     double prev_cost = std::numeric_limits<double>::infinity();
     SE3 T_before_step = T;
 
     const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
     for (int it = 0; it < iterations; ++it) {
-      const Eigen::Matrix3f R = T.rotation().cast<float>();
-      const Eigen::Vector3f t = T.translation().cast<float>();
-      std::array<Accumulator, kStripes> acc{};
-      const int rows = A.depth.rows;
-      cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-        for (int s = range.start; s < range.end; ++s) {
-          Accumulator& a = acc[s];
-          const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
-          for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) {
-            const float* dA = A.depth.ptr<float>(y);
-            const float* iA = A.intensity.ptr<float>(y);
-            const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
-            for (int x = 1; x < A.depth.cols - 1; ++x) {
-              const float z = dA[x];
-              if (!(z >= zmin && z <= zmax)) continue;
-              float v_pix = wr ? wr[x] : 1.0f;
-              if (v_pix <= 0) continue;
-              const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
-              Warp w;
-              if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
-              v_pix *= targetWeight(B.target_weight, w);
-              if (v_pix <= 0) continue;
-              const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
-              if (hiddenInTarget(zB, w.qz, occlusion)) continue;
-              // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
-              const float iz = 1.0f / w.qz, iz2 = iz * iz;
-              const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
-                                   fx * (1 + w.qx * w.qx * iz2), -fx * w.qy * iz};
-              const float Jv[6] = {0, fy * iz, -fy * w.qy * iz2, -fy * (1 + w.qy * w.qy * iz2),
-                                   fy * w.qx * w.qy * iz2, fy * w.qx * iz};
-              bool used = false;
-              if (c.use_intensity) {
-                const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
-                const float gx = bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI;
-                const float gy = bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI;
-                float J[6];
-                for (int k = 0; k < 6; ++k) J[k] = gx * Ju[k] + gy * Jv[k];
-                const float q = r * r * inv_c2;
-                a.add(J, r, v_pix / (1 + q));
-                a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
-                used = true;
-              }
-              if (c.use_depth && zB > 0) {
-                const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
-                const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
-                const float slope = std::sqrt(gx * gx + gy * gy);
-                const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
-                const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
-                const float inv_s = 1.0f / sigma;
-                const float r = (zB - w.qz) * inv_s;
-                // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
-                const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
-                float J[6];
-                for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
-                const float q = r * r * inv_c2;
-                a.add(J, r, v_pix / (1 + q));
-                a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
-                used = true;
-              }
-              if (used) ++a.count;
-            }
-            a.flushRow();
-          }
-        }
-      });
-      Accumulator total;
-      for (const auto& a : acc) total.merge(a);
+      const Accumulator total = accumulateLevel(A, B, wimg, wB, T, c);
       const Matrix6d H = total.hessian();
       Vector6d g;
       for (int i = 0; i < 6; ++i) g[i] = total.g[i];
@@ -303,11 +308,11 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
   }
 
   result.hessian = H_last;
-  const int level_pixels = ref.level(c.finest_level).depth.rows * ref.level(c.finest_level).depth.cols;
+  const int level_pixels = source.level(c.finest_level).depth.rows * source.level(c.finest_level).depth.cols;
   const auto fail = [&](const std::string& why) {
     result.ok = false;
     result.message = why;
-    result.T_cur_ref = T_init;
+    result.T_target_source = T_init;
     return result;
   };
   if (result.valid_pixels < std::max(12.0, c.min_valid_fraction * level_pixels))
@@ -321,22 +326,24 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& ref, const OdometryF
     return fail("tracking failed: diverged (" + std::to_string(translationNorm(T)) + " m, " +
                 std::to_string(rotationAngleDeg(T)) + " deg in one frame)");
   result.ok = true;
-  result.T_cur_ref = T;
+  result.T_target_source = T;
   result.message = "ok";
   return result;
 }
 
-PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFrame& cur, const SE3& T_cur_ref,
-                                     int level, const OdometryConfig& c) {
-  const PyramidLevel& A = ref.level(level);
-  const PyramidLevel& B = cur.level(level);
+PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
+                                     const SE3& T_target_source, int level, const OdometryConfig& c,
+                                     const cv::Mat& target_weights) {
+  const PyramidLevel& A = source.level(level);
+  const PyramidLevel& B = target.level(level);
+  const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
   const CameraIntrinsics& cam = A.camera;
   PixelResiduals out;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   out.abs_intensity = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
   out.abs_depth = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
-  const Eigen::Matrix3f R = T_cur_ref.rotation().cast<float>();
-  const Eigen::Vector3f t = T_cur_ref.translation().cast<float>();
+  const Eigen::Matrix3f R = T_target_source.rotation().cast<float>();
+  const Eigen::Vector3f t = T_target_source.translation().cast<float>();
   const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
   const float occlusion = static_cast<float>(c.occlusion_ratio);
   cv::parallel_for_(cv::Range(0, A.depth.rows), [&](const cv::Range& range) {
@@ -352,7 +359,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& ref, const OdometryFra
         if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
                        (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
           continue;
-        if (targetWeight(B.target_weight, w) < 0.5f) continue;
+        if (targetWeight(wB, w) < 0.5f) continue;
         const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
         if (hiddenInTarget(zB, w.qz, occlusion)) continue;
         oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);

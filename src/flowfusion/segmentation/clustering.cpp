@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
+#include <stdexcept>
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/segmentation/cluster_graph_builder.h"
@@ -10,16 +12,46 @@ namespace ff {
 std::unique_ptr<Clusterer> makeKMeansClusterer(const ClusteringConfig& config);
 std::unique_ptr<Clusterer> makeSupervoxelClusterer(const ClusteringConfig& config);
 
-std::vector<std::string> clustererBackends() { return {"kmeans", "supervoxel"}; }
-
-std::unique_ptr<Clusterer> makeClusterer(const ClusteringConfig& config) {
+void validate(const ClusteringConfig& config) {
   if (!(config.adjacency_max_rel_depth_jump > 0))
     throw InputError("clustering.adjacency_max_rel_depth_jump must be > 0");
-  if (config.backend == "kmeans") return makeKMeansClusterer(config);
-  if (config.backend == "supervoxel") return makeSupervoxelClusterer(config);
-  std::string valid;
-  for (const auto& b : clustererBackends()) valid += (valid.empty() ? "" : ", ") + b;
-  throw InputError("clustering.backend: unknown clustering backend '" + config.backend + "' (valid: " + valid + ")");
+  if (config.adjacency_min_contacts < 1) throw InputError("clustering.adjacency_min_contacts must be >= 1");
+  if (config.kmeans_clusters < 1 || config.kmeans_clusters > 100000)
+    throw InputError("clustering.kmeans_clusters must be 1 to 100000");
+  if (config.kmeans_subsample < 1 || config.kmeans_subsample > 64)
+    throw InputError("clustering.kmeans_subsample must be 1 to 64");
+  if (config.kmeans_iterations < 1 || config.kmeans_iterations > 1000)
+    throw InputError("clustering.kmeans_iterations must be 1 to 1000");
+  // PCL asserts (and aborts the program) when its octree needs more levels than its keys hold,
+  // and takes minutes and gigabytes well before that: voxels below a millimetre are refused here.
+  const auto require = [](bool ok, const std::string& message) {
+    if (!ok) throw InputError("clustering." + message);
+  };
+  const auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return std::string(buf);
+  };
+  require(config.voxel_resolution >= 0.001 && config.voxel_resolution <= 1.0,
+          "voxel_resolution must be 0.001 to 1 metre, got " + num(config.voxel_resolution));
+  require(config.seed_resolution > config.voxel_resolution && config.seed_resolution <= 10.0,
+          "seed_resolution must be above voxel_resolution and at most 10 metres, got " +
+              num(config.seed_resolution));
+  for (const auto& [name, value] : {std::pair{"color_importance", config.color_importance},
+                                    std::pair{"spatial_importance", config.spatial_importance},
+                                    std::pair{"normal_importance", config.normal_importance}})
+    require(value >= 0 && value <= 1e3, std::string(name) + " must be 0 to 1000, got " + num(value));
+}
+
+std::unique_ptr<Clusterer> makeClusterer(const ClusteringConfig& config) {
+  validate(config);
+  switch (config.backend) {
+    case ClusteringBackend::KMeans:
+      return makeKMeansClusterer(config);
+    case ClusteringBackend::Supervoxel:
+      return makeSupervoxelClusterer(config);
+  }
+  throw std::logic_error("makeClusterer: unhandled clustering.backend");
 }
 
 namespace detail {

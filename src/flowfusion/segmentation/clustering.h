@@ -1,6 +1,6 @@
 #pragma once
 // Over-segmentation of frame A's point cloud into clusters with an adjacency graph
-// (NOTES.md step 1).
+// (the paper's first step; docs/design.md).
 #include <Eigen/Core>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/core/config_enum.h"
 #include "flowfusion/core/rgbd_frame.h"
 
 namespace ff {
@@ -23,17 +24,18 @@ struct ClusterGraph {
   std::vector<Eigen::Vector3f> centroids;  // camera frame of A, metres
 };
 
-struct ClusteringConfig {
-  // "kmeans" (k-means on back-projected 3D points of a subsampled image, labels propagated to
-  // full resolution; ~6 ms CPU at 640x480) or "supervoxel" (pcl::SupervoxelClustering, the
-  // paper's choice; ~45 ms, and 24 % of a box against a wall in leaking clusters against 0 %
-  // for kmeans). See bench/bench_flow_segmentation.cpp for the comparison.
-  std::string backend = "kmeans";
+enum class ClusteringBackend { KMeans, Supervoxel };
+FLOWFUSION_CONFIG_ENUM(ClusteringBackend, "clustering.backend", {ClusteringBackend::KMeans, "kmeans"},
+                       {ClusteringBackend::Supervoxel, "supervoxel"})
 
-  // kmeans: number of clusters, seeded on a regular image grid (StaticFusion uses 24 at
-  // QVGA). On a flat box 10 cm in front of a wall (640x480, bench BM_ClusterKMeans/640/1/*),
-  // 48 and 96 clusters leave 30 % of the box in clusters that leak onto the wall, 192 none,
-  // for ~1 ms more.
+struct ClusteringConfig {
+  // kmeans: k-means on back-projected 3D points of a subsampled image, labels propagated to full
+  // resolution (fast, and clusters stay inside objects); supervoxel: pcl::SupervoxelClustering,
+  // the paper's choice, several times slower (docs/tuning.md#clustering).
+  ClusteringBackend backend = ClusteringBackend::KMeans;
+
+  // kmeans: number of clusters, seeded on a regular image grid; enough that no cluster leaks from
+  // an object onto the wall behind it (docs/tuning.md#clustering).
   int kmeans_clusters = 192;
   // kmeans: the points clustered are every `kmeans_subsample`-th pixel in x and y.
   int kmeans_subsample = 8;
@@ -69,8 +71,10 @@ class Clusterer {
   virtual std::string name() const = 0;
 };
 
-// Throws InputError for an unknown backend (listing the valid ones) or a bad parameter.
+// Throws InputError naming the first bad setting.
+void validate(const ClusteringConfig& config);
+
+// The backend the configuration names; throws InputError on a bad configuration.
 std::unique_ptr<Clusterer> makeClusterer(const ClusteringConfig& config);
-std::vector<std::string> clustererBackends();
 
 }  // namespace ff

@@ -49,6 +49,8 @@ struct ScoreConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G, alpha_M,
                                                 model_margin, model_needs_motion, model_motion_delta, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior)
+// Throws InputError naming the first bad setting.
+void validate(const ScoreConfig& config);
 
 // Per-pixel residuals of A, CV_32F, same size as the cluster labels; NaN = invalid (skipped).
 // An empty image leaves its term out of Eq. 10.

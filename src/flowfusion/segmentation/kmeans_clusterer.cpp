@@ -198,9 +198,6 @@ class KMeansClusterer : public Clusterer {
 }  // namespace
 
 std::unique_ptr<Clusterer> makeKMeansClusterer(const ClusteringConfig& config) {
-  if (config.kmeans_clusters < 1) throw InputError("clustering.kmeans_clusters must be >= 1");
-  if (config.kmeans_subsample < 1) throw InputError("clustering.kmeans_subsample must be >= 1");
-  if (config.kmeans_iterations < 1) throw InputError("clustering.kmeans_iterations must be >= 1");
   return std::make_unique<KMeansClusterer>(config);
 }
 

@@ -79,8 +79,6 @@ class SupervoxelClusterer : public Clusterer {
 }  // namespace
 
 std::unique_ptr<Clusterer> makeSupervoxelClusterer(const ClusteringConfig& config) {
-  if (!(config.voxel_resolution > 0) || !(config.seed_resolution > config.voxel_resolution))
-    throw InputError("clustering: need 0 < voxel_resolution < seed_resolution (metres)");
   return std::make_unique<SupervoxelClusterer>(config);
 }
 

@@ -1,10 +1,10 @@
-#include <opencv2/imgcodecs.hpp>
+#include "flowfusion/visualization/map_preview.h"
 
 #include <algorithm>
 #include <filesystem>
 
+#include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
-#include "flowfusion/fusion/static_map.h"
 
 namespace ff {
 
@@ -82,29 +82,10 @@ std::vector<std::string> writePreviews(const StaticMap& map, const std::string& 
   std::vector<std::string> paths;
   for (size_t k = 0; k < views.size(); ++k) {
     const std::string path = (std::filesystem::path(dir) / ("preview_" + std::to_string(k) + ".png")).string();
-    if (!cv::imwrite(path, renderPreview(map, views[k], camera))) throw InputError("cannot write preview '" + path + "'");
+    writePngAtomic(path, renderPreview(map, views[k], camera), "map preview");
     paths.push_back(path);
   }
   return paths;
-}
-
-cv::Mat overlayMask(const cv::Mat& bgr, const cv::Mat& mask) {
-  if (bgr.type() != CV_8UC3) throw InputError("overlayMask: the colour image must be CV_8UC3");
-  if (mask.size() != bgr.size() || (mask.type() != CV_8UC1 && mask.type() != CV_32FC1))
-    throw InputError("overlayMask: the mask must be CV_8UC1 or CV_32FC1 of the colour image's size");
-  constexpr float kTint = 0.6f;  // how far a fully dynamic pixel moves towards pure red
-  cv::Mat out = bgr.clone();
-  for (int y = 0; y < bgr.rows; ++y)
-    for (int x = 0; x < bgr.cols; ++x) {
-      const float m = mask.type() == CV_8UC1 ? (mask.at<uchar>(y, x) ? 1.0f : 0.0f)
-                                             : std::clamp(mask.at<float>(y, x), 0.0f, 1.0f);
-      if (m == 0) continue;
-      cv::Vec3b& c = out.at<cv::Vec3b>(y, x);
-      const float a = kTint * m;
-      c = cv::Vec3b(cv::saturate_cast<uchar>((1 - a) * c[0]), cv::saturate_cast<uchar>((1 - a) * c[1]),
-                    cv::saturate_cast<uchar>((1 - a) * c[2] + a * 255));
-    }
-  return out;
 }
 
 }  // namespace ff

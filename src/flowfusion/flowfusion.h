@@ -1,0 +1,20 @@
+#pragma once
+// flowfusion's public API in one include: a frame source, the system, result sinks and the
+// evaluation. Each stage's header can also be included on its own (docs/design.md).
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/config.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/se3.h"
+#include "flowfusion/core/timings.h"
+#include "flowfusion/eval/segmentation_metrics.h"
+#include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/io/frame_source.h"
+#include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/io/tum_folder_source.h"
+#include "flowfusion/io/tum_sequence.h"
+#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/flowfusion_system.h"
+#include "flowfusion/pipeline/result_sink.h"
+#include "flowfusion/pipeline/run.h"
+#include "flowfusion/pipeline/system_config.h"
+#include "flowfusion/synth/synthetic_scene.h"

@@ -1,0 +1,87 @@
+#include "flowfusion/pipeline/run.h"
+
+#include <chrono>
+#include <memory>
+
+#include "flowfusion/eval/bench_utils.h"
+
+namespace ff {
+
+SE3 initialPose(const FrameSource& source, double timestamp) {
+  SE3 T = SE3::Identity();
+  if (const Trajectory* gt = source.groundtruth(); gt && interpolatePose(*gt, timestamp, T, 0.1)) return T;
+  return SE3::Identity();
+}
+
+namespace {
+
+// Reads the next frame and records how long that took.
+std::optional<RgbdFrame> nextFrame(FrameSource& source, std::vector<double>& load_ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::optional<RgbdFrame> frame = source.next();
+  load_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return frame;
+}
+
+void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms) {
+  if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
+  s.trajectory = system.trajectory();
+  s.tracking_failures = system.trackingFailures();
+  s.flow_restarts = system.flowRestarts();
+  s.load_ms_median = median(load_ms);
+  s.timings = system.timings();
+  if (const StaticMap* map = system.map()) {
+    s.map_surfels = map->size();
+    s.map_budget_reached = map->budgetReached();
+  }
+  s.peak_memory_mib = eval::peakResidentMiB();
+}
+
+void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFusionSystem& system) {
+  for (ResultSink* sink : sinks) sink->end(s, system);
+}
+
+}  // namespace
+
+RunSummary runSequence(FrameSource& source, const SystemConfig& config, const std::vector<ResultSink*>& sinks,
+                       const RunControl& control) {
+  validate(config);
+  const RunInfo info{source.name(), &source, config, source.camera(), source.remaining()};
+  for (ResultSink* sink : sinks) sink->begin(info);
+  std::vector<double> load_ms;
+  std::unique_ptr<FlowFusionSystem> system;
+  RunSummary summary;
+  try {
+    for (std::optional<RgbdFrame> frame = nextFrame(source, load_ms); frame; frame = nextFrame(source, load_ms)) {
+      if (control.stop && control.stop->load()) {
+        summary.complete = false;
+        summary.stop_reason = control.reason && *control.reason ? *control.reason : "stopped";
+        break;
+      }
+      // The first frame's time gives the start pose from the ground truth.
+      if (!system)
+        system = std::make_unique<FlowFusionSystem>(config, source.camera(), initialPose(source, frame->timestamp));
+      const FrameResult r = system->process(*frame);
+      for (ResultSink* sink : sinks) sink->frame(*frame, r);
+      ++summary.frames;
+      summary.mean_rounds += r.iterations;
+    }
+  } catch (const std::exception& e) {
+    summary.complete = false;
+    summary.stop_reason = e.what();
+    if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
+    summarise(summary, *system, load_ms);
+    try {
+      endSinks(sinks, summary, *system);
+    } catch (const std::exception&) {
+      // The frame's own error is the one to report.
+    }
+    throw;
+  }
+  if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
+  summarise(summary, *system, load_ms);
+  endSinks(sinks, summary, *system);
+  return summary;
+}
+
+}  // namespace ff

@@ -1,0 +1,27 @@
+#pragma once
+// A run: frames from a source, through the system, to the sinks (`flowfusion run`, `bench`, the
+// Python package). The loop knows nothing of files; FilesSink (pipeline/files_sink.h) writes them.
+#include <atomic>
+#include <vector>
+
+#include "flowfusion/io/frame_source.h"
+#include "flowfusion/pipeline/result_sink.h"
+
+namespace ff {
+
+struct RunControl {
+  // Checked before each frame: when set, the run stops there and ends its sinks with
+  // RunSummary::complete = false and stop_reason = *reason (e.g. a signal handler's flag).
+  const std::atomic<bool>* stop = nullptr;
+  const char* const* reason = nullptr;
+};
+
+// The ground truth's pose at `timestamp` (s) when the source has one, else identity.
+SE3 initialPose(const FrameSource& source, double timestamp);
+
+// Processes every frame of `source`. A frame that throws ends the sinks with an incomplete
+// summary (the frames before it kept) and is rethrown.
+RunSummary runSequence(FrameSource& source, const SystemConfig& config, const std::vector<ResultSink*>& sinks,
+                       const RunControl& control = {});
+
+}  // namespace ff

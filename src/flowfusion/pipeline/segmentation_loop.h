@@ -1,0 +1,63 @@
+#pragma once
+// The segmentation loop of one frame (paper Fig. 1, Sections III-B and III-C): optical flow from
+// the current to the previous image; a restart of the odometry from the flow's rigid consensus
+// when that explains clearly more of the flow (flow/flow_motion.h); then clusters, residuals
+// r_I, r_D, r_F (Eq. 8-9) and the static map's occlusion and agreement evidence, dynamic scores
+// (Eq. 10-15) and the odometry re-estimated with weights 1 - b (Eq. 16), repeated until the
+// motion settles.
+//
+// Frames: the paper's frame A, whose pixels carry clusters and scores, is the CURRENT frame (the
+// odometry's source); the target is the tracking target (previous frame, keyframe or the map's
+// prediction), so each frame's mask and weights live in its own pixels.
+#include <memory>
+
+#include "flowfusion/core/timings.h"
+#include "flowfusion/flow/optical_flow.h"
+#include "flowfusion/pipeline/tracking_target.h"
+#include "flowfusion/segmentation/clustering.h"
+
+namespace ff {
+
+// The motion of the current frame against its target and the scores that go with it.
+struct MotionEstimate {
+  OdometryResult odometry;   // the last successful full estimate (or the failed first one)
+  SE3 T_target_cur;          // current-camera points into the target camera
+  cv::Mat scores;            // b per pixel at the segmentation level; empty when none
+  bool restarted_from_flow = false;
+  int rounds = 0;            // score <-> odometry rounds run
+};
+
+struct SegmentationInput {
+  const RgbdFrame& frame;
+  const OdometryFrame& cur;
+  const TrackedFrame& previous;
+  const TrackingTarget& target;
+  SE3 T_target_prev;
+  const StaticMap* map;  // null without fusion
+};
+
+class SegmentationLoop {
+ public:
+  SegmentationLoop(const SystemConfig& config, const CameraIntrinsics& camera);
+  // Refines `estimate`, which holds the first odometry and the carried scores.
+  void run(const SegmentationInput& in, MotionEstimate& estimate, Timings& timings);
+
+ private:
+  // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image.
+  cv::Mat flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
+  void restartFromFlow(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+  // The static map's occlusion r_M and agreement a_M at the current estimate (empty when off).
+  std::pair<cv::Mat, cv::Mat> mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
+                                          Timings& timings) const;
+  void scoreRounds(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+
+  SystemConfig config_;
+  CameraIntrinsics camera_;
+  CameraIntrinsics seg_camera_;
+  DenseOdometry odometry_;
+  DenseOdometry refine_odometry_;  // the rounds' re-estimates (refine_iterations per level)
+  std::unique_ptr<OpticalFlow> flow_;
+  std::unique_ptr<Clusterer> clusterer_;
+};
+
+}  // namespace ff

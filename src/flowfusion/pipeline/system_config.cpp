@@ -1,0 +1,44 @@
+#include "flowfusion/pipeline/system_config.h"
+
+#include <cmath>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+namespace {
+
+void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
+  const auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  if (p.tracking == TrackingMode::FrameToModel && !p.fusion)
+    throw InputError("pipeline.tracking frame_to_model needs pipeline.fusion = true (the map is the model)");
+  if (!positive(p.keyframe_translation)) throw InputError("pipeline.keyframe_translation must be > 0 (metres)");
+  if (!positive(p.keyframe_rotation_deg)) throw InputError("pipeline.keyframe_rotation_deg must be > 0 (degrees)");
+  if (p.max_iterations < 1 || p.max_iterations > 100) throw InputError("pipeline.max_iterations must be 1 to 100");
+  if (!positive(p.converged_translation)) throw InputError("pipeline.converged_translation must be > 0 (metres)");
+  if (!positive(p.converged_rotation_deg)) throw InputError("pipeline.converged_rotation_deg must be > 0 (degrees)");
+  if (p.refine_coarsest_level < -1 || p.refine_coarsest_level >= odometry.levels)
+    throw InputError("pipeline.refine_coarsest_level must be -1 (the coarsest) or in [0, odometry.levels)");
+  if (p.refine_iterations < 1 || p.refine_iterations > 100)
+    throw InputError("pipeline.refine_iterations must be 1 to 100");
+  if (p.segmentation_level < 0 || p.segmentation_level >= odometry.levels)
+    throw InputError("pipeline.segmentation_level must be in [0, odometry.levels)");
+  if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
+  if (p.fusion_every < 1 || p.fusion_every > 1000) throw InputError("pipeline.fusion_every must be 1 to 1000");
+  if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
+    throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");
+}
+
+}  // namespace
+
+void validate(const SystemConfig& c) {
+  validate(c.odometry);
+  validate(c.pipeline, c.odometry);
+  validate(c.flow);
+  validate(c.consensus);
+  validate(c.clustering);
+  validate(c.scores);
+  validate(c.fusion);
+}
+
+}  // namespace ff

@@ -1,0 +1,82 @@
+#pragma once
+// The whole system's configuration: one section per stage (each documented in its stage's
+// header) and the pipeline's own options. A run writes it as config.json, a valid --config file.
+#include <nlohmann/json.hpp>
+
+#include "flowfusion/core/config_enum.h"
+#include "flowfusion/flow/flow_motion.h"
+#include "flowfusion/flow/optical_flow.h"
+#include "flowfusion/fusion/static_map.h"
+#include "flowfusion/odometry/dense_odometry.h"
+#include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/dynamic_score.h"
+
+namespace ff {
+
+// What each frame is aligned to (pipeline/tracking_target.h).
+enum class TrackingMode {
+  FrameToFrame,     // the previous frame
+  FrameToKeyframe,  // the last keyframe, replaced once the camera moved far enough from it
+  FrameToModel,     // the static map's depth predicted at the previous pose (else the previous frame)
+};
+FLOWFUSION_CONFIG_ENUM(TrackingMode, "pipeline.tracking", {TrackingMode::FrameToFrame, "frame_to_frame"},
+                       {TrackingMode::FrameToKeyframe, "frame_to_keyframe"},
+                       {TrackingMode::FrameToModel, "frame_to_model"})
+
+struct PipelineOptions {
+  TrackingMode tracking = TrackingMode::FrameToKeyframe;
+  double keyframe_translation = 0.05;   // m the camera moves from a keyframe before a new one
+  double keyframe_rotation_deg = 5.0;   // deg the camera turns from a keyframe before a new one
+  // A new keyframe takes its depth from the static map predicted at its pose (its own image stays
+  // the photometric target, its dynamic pixels keep their depth): frame-to-model tracking with one
+  // rendering per keyframe (docs/tuning.md#model_keyframes).
+  bool model_keyframes = true;
+  bool segmentation = true;          // false: the plain robust odometry (--no-segmentation)
+  int max_iterations = 8;            // segmentation <-> odometry rounds at most (paper, Table III)
+  double converged_translation = 0.0005;  // m: the loop stops when a round moves the pose less
+  double converged_rotation_deg = 0.05;   // deg: ... and rotates it less than this
+  // Pyramid level the loop's weighted re-estimates start from (-1: the coarsest); they start a
+  // fraction of a pixel from the answer, so the coarse levels only cost time.
+  int refine_coarsest_level = 1;
+  int refine_iterations = 1;         // Gauss-Newton iterations per level of each re-estimate
+  int segmentation_level = 1;        // pyramid level of clusters and residuals (1 = half size)
+  float mask_threshold = 0.5f;       // pixels with b above it are written as dynamic
+  // The first odometry of a frame is weighted by the previous frame's scores carried over, so a
+  // moving object seen before does not pull it (false: the paper's unweighted Eq. 1).
+  bool carry_scores = true;
+  bool fusion = true;                // build the static map (needed for frame_to_model)
+  // Fuse every n-th frame: half the fusion time at 2, and a moving object missed for a frame or
+  // two is less often taken as background (docs/tuning.md#fusion_every).
+  int fusion_every = 2;
+  // Start each frame's odometry from the previous frame's motion (else from no motion).
+  bool constant_velocity = true;
+  // Report each pose at the colour image's time, moved from the depth image's time along the
+  // last motion (TUM's colour and depth are up to 20 ms apart).
+  bool shift_to_colour_time = true;
+  // Fraction of the frame's depth pixels a map prediction must cover to serve as a target.
+  double model_min_valid_fraction = 0.5;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
+                                                keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
+                                                converged_translation, converged_rotation_deg, refine_coarsest_level,
+                                                refine_iterations, segmentation_level, mask_threshold, carry_scores,
+                                                fusion, fusion_every, constant_velocity, shift_to_colour_time,
+                                                model_min_valid_fraction)
+
+struct SystemConfig {
+  PipelineOptions pipeline;
+  OdometryConfig odometry;
+  FlowConfig flow;
+  ConsensusConfig consensus;
+  ClusteringConfig clustering;
+  ScoreConfig scores;
+  FusionConfig fusion;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry, flow, consensus, clustering, scores,
+                                                fusion)
+
+// Checks every section (each stage's validate()) and the pipeline's options against them.
+// Throws InputError naming the first bad setting.
+void validate(const SystemConfig& config);
+
+}  // namespace ff

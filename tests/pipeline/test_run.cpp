@@ -1,0 +1,152 @@
+// The run loop and the files sink: sinks see every frame in order, a stop or a failing frame
+// ends them with an honest incomplete summary, and the files sink writes what `run` promises.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "flowfusion/core/config.h"
+#include "flowfusion/core/error.h"
+#include "flowfusion/io/tum_folder_source.h"
+#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/run.h"
+#include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
+
+namespace ff {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Frames of a small synthetic scene; throws at frame `fail_at` when set.
+class SynthSource : public FrameSource {
+ public:
+  explicit SynthSource(int frames, int fail_at = -1) : fail_at_(fail_at) {
+    synth::SynthConfig c;
+    c.frames = frames;
+    c.width = 160;
+    c.height = 120;
+    scene_ = std::make_unique<synth::SyntheticScene>(c);
+  }
+  const CameraIntrinsics& camera() const override { return scene_->camera(); }
+  std::optional<RgbdFrame> next() override {
+    if (next_ == scene_->frameCount()) return std::nullopt;
+    if (next_ == fail_at_) throw InputError("frame " + std::to_string(next_) + ": unreadable");
+    return scene_->render(next_++).frame;
+  }
+  std::optional<size_t> remaining() const override { return scene_->frameCount() - next_; }
+  std::string name() const override { return "synth"; }
+
+ private:
+  std::unique_ptr<synth::SyntheticScene> scene_;
+  int next_ = 0, fail_at_;
+};
+
+// Records the calls it gets; asks the run to stop after `stop_after` frames.
+struct ProbeSink : ResultSink {
+  std::vector<std::string> calls;
+  std::vector<double> stamps;
+  std::atomic<bool>* stop = nullptr;
+  size_t stop_after = 0;
+  void begin(const RunInfo& info) override { calls.push_back("begin " + info.source); }
+  void frame(const RgbdFrame& f, const FrameResult& r) override {
+    calls.push_back("frame");
+    stamps.push_back(r.timestamp);
+    EXPECT_EQ(r.timestamp, f.timestamp);
+    if (stop && stamps.size() == stop_after) *stop = true;
+  }
+  void end(RunSummary& s, const FlowFusionSystem& system) override {
+    calls.push_back(s.complete ? "end complete" : "end incomplete");
+    EXPECT_EQ(system.trajectory().size(), s.frames);
+  }
+};
+
+TEST(RunSequence, EverySinkSeesEveryFrameInOrder) {
+  SynthSource source(4);
+  ProbeSink a, b;
+  const RunSummary s = runSequence(source, SystemConfig{}, {&a, &b});
+  EXPECT_TRUE(s.complete);
+  EXPECT_EQ(s.frames, 4u);
+  const std::vector<std::string> expected = {"begin synth", "frame", "frame", "frame", "frame", "end complete"};
+  EXPECT_EQ(a.calls, expected);
+  EXPECT_EQ(b.calls, expected);
+  EXPECT_TRUE(std::is_sorted(a.stamps.begin(), a.stamps.end()));
+}
+
+TEST(RunSequence, AStopRequestEndsAfterTheCurrentFrame) {
+  SynthSource source(6);
+  std::atomic<bool> stop{false};
+  const char* reason = "interrupted (test)";
+  ProbeSink probe;
+  probe.stop = &stop;
+  probe.stop_after = 2;
+  const RunSummary s = runSequence(source, SystemConfig{}, {&probe}, {&stop, &reason});
+  EXPECT_FALSE(s.complete);
+  EXPECT_EQ(s.stop_reason, "interrupted (test)");
+  EXPECT_EQ(s.frames, 2u);
+  EXPECT_EQ(s.trajectory.size(), 2u);
+  EXPECT_EQ(probe.calls.back(), "end incomplete");
+}
+
+TEST(FilesSink, WritesResultsAndRefusesANonEmptyFolder) {
+  testing::TempDir tmp;
+  synth::SynthConfig sc;
+  sc.frames = 8;
+  sc.width = 320;
+  sc.height = 240;
+  const std::string seq_dir = (tmp.path() / "seq").string();
+  synth::writeSequence(synth::SyntheticScene(sc), seq_dir);
+  TumFolderSource source(TumSequence::open(seq_dir));
+  FilesSinkOptions options;
+  options.out_dir = (tmp.path() / "out").string();
+  FilesSink sink(options);
+  const RunSummary summary = runSequence(source, SystemConfig{}, {&sink});
+  EXPECT_EQ(summary.frames, 8u);
+
+  const fs::path out = options.out_dir;
+  for (const char* name : {"trajectory.txt", "config.json", "timings.csv", "summary.json", "map.ply", "map_points.ply"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / name)) << name;
+    EXPECT_GT(fs::file_size(out / name), 0u) << name;
+  }
+  int pngs = 0;
+  for (const auto& e : fs::directory_iterator(out / "masks")) pngs += e.path().extension() == ".png";
+  EXPECT_EQ(pngs, 8);
+  EXPECT_EQ(readTrajectory((out / "trajectory.txt").string()).size(), 8u);
+  EXPECT_TRUE(readJsonFile((out / "summary.json").string())["complete"].get<bool>());
+
+  TumFolderSource again(TumSequence::open(seq_dir));
+  FilesSink second(options);
+  EXPECT_THROW(runSequence(again, SystemConfig{}, {&second}), InputError);
+}
+
+TEST(FilesSink, AFailingFrameLeavesAMarkedPartialResult) {
+  testing::TempDir tmp;
+  SynthSource source(6, 3);
+  FilesSinkOptions options;
+  options.out_dir = (tmp.path() / "out").string();
+  FilesSink sink(options);
+  EXPECT_THROW(runSequence(source, SystemConfig{}, {&sink}), InputError);
+  const nlohmann::json summary = readJsonFile((tmp.path() / "out" / "summary.json").string());
+  EXPECT_FALSE(summary["complete"].get<bool>());
+  EXPECT_NE(summary["stop_reason"].get<std::string>().find("frame 3: unreadable"), std::string::npos);
+  EXPECT_EQ(summary["frames"].get<int>(), 3);
+  EXPECT_EQ(readTrajectory((tmp.path() / "out" / "trajectory.txt").string()).size(), 3u);
+  EXPECT_FALSE(fs::exists(tmp.path() / "out" / "map.ply"));
+}
+
+TEST(FilesSink, ARunTooShortForAMeshSucceedsAndSaysSo) {
+  testing::TempDir tmp;
+  SynthSource source(1);
+  FilesSinkOptions options;
+  options.out_dir = (tmp.path() / "out").string();
+  FilesSink sink(options);
+  const RunSummary s = runSequence(source, SystemConfig{}, {&sink});
+  EXPECT_TRUE(s.complete);
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("no map written"), std::string::npos);
+  const nlohmann::json summary = readJsonFile((tmp.path() / "out" / "summary.json").string());
+  EXPECT_EQ(summary["notes"].size(), 1u);
+}
+
+}  // namespace
+}  // namespace ff

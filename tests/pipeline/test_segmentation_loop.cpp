@@ -1,0 +1,106 @@
+// The segmentation loop on its own: on a pair of synthetic frames with moving objects, with the
+// static map of the frames before and the previous frame's scores as the system has them, it must
+// mark the objects' pixels dynamic and keep the camera's motion, and a wrong first odometry must
+// be restarted from the flow's rigid consensus.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "flowfusion/pipeline/segmentation_loop.h"
+#include "flowfusion/synth/synthetic_scene.h"
+
+namespace ff {
+namespace {
+
+struct LoopFixture {
+  LoopFixture() {
+    synth::SynthConfig c;
+    c.seed = 2;  // both objects in view from the first frame
+    c.frames = 12;
+    c.width = 320;
+    c.height = 240;
+    scene = std::make_unique<synth::SyntheticScene>(c);
+    prev_view = std::make_unique<synth::SynthFrame>(scene->render(9));
+    cur_view = std::make_unique<synth::SynthFrame>(scene->render(10));
+    previous.frame = prev_view->frame;
+    previous.odo = prepareOdometryFrame(previous.frame.intensity, previous.frame.depth, scene->camera(), config.odometry);
+    previous.T_world_cam = prev_view->T_world_cam;
+    // The previous frame's scores, as the system carries them: its objects' true pixels.
+    cv::resize(prev_view->mask, previous.scores, previous.odo.level(1).depth.size(), 0, 0, cv::INTER_NEAREST);
+    previous.scores.convertTo(previous.scores, CV_32F, 1.0 / 255);
+    cur = prepareOdometryFrame(cur_view->frame.intensity, cur_view->frame.depth, scene->camera(), config.odometry);
+    target = {&previous.odo, &no_weights, previous.T_world_cam, false, nullptr};
+    // The static map of the frames before, fused as the system does (moving objects left out).
+    for (int i = 0; i < 9; ++i) {
+      const synth::SynthFrame v = scene->render(i);
+      cv::Mat static_weight;
+      v.mask.convertTo(static_weight, CV_32F, -1.0 / 255, 1.0);
+      map.integrate(v.frame, scene->camera(), v.T_world_cam, static_weight);
+    }
+  }
+  SE3 truth() const { return prev_view->T_world_cam.inverse() * cur_view->T_world_cam; }  // T_prev_cur
+  // The first odometry as the system runs it: weighted by the scores carried from the previous
+  // frame, here the objects' true pixels.
+  MotionEstimate firstOdometry(const SE3& guess) const {
+    cv::Mat carried;
+    cur_view->mask.convertTo(carried, CV_32F, 1.0 / 255);
+    MotionEstimate e;
+    e.odometry = DenseOdometry(config.odometry).estimate(cur, previous.odo, guess, 1.0f - carried);
+    e.T_target_cur = e.odometry.ok ? e.odometry.T_target_source : guess;
+    return e;
+  }
+  double iou(const MotionEstimate& e) const {
+    cv::Mat full;
+    cv::resize(e.scores, full, cur_view->mask.size(), 0, 0, cv::INTER_NEAREST);
+    const cv::Mat est = full > 0.5f, gt = cur_view->mask > 0;
+    return static_cast<double>(cv::countNonZero(est & gt)) / std::max(1, cv::countNonZero(est | gt));
+  }
+
+  SystemConfig config;
+  std::unique_ptr<synth::SyntheticScene> scene;
+  std::unique_ptr<synth::SynthFrame> prev_view, cur_view;
+  TrackedFrame previous;
+  OdometryFrame cur;
+  cv::Mat no_weights;
+  TrackingTarget target;
+  StaticMap map;
+  Timings timings;
+};
+
+TEST(SegmentationLoop, MarksTheMovingObjectsAndKeepsTheCameraMotion) {
+  LoopFixture f;
+  ASSERT_GT(cv::countNonZero(f.cur_view->mask), static_cast<int>(f.cur_view->mask.total() / 50));
+  MotionEstimate e = f.firstOdometry(SE3::Identity());
+  SegmentationLoop loop(f.config, f.scene->camera());
+  loop.run({f.cur_view->frame, f.cur, f.previous, f.target, SE3::Identity(), &f.map}, e, f.timings);
+  EXPECT_GE(e.rounds, 1);
+  EXPECT_FALSE(e.restarted_from_flow);
+  const double error_m = translationNorm(f.truth().inverse() * e.T_target_cur);
+  std::printf("[ measured ] mask IoU %.3f, translation error %.2f mm after %d rounds\n", f.iou(e), error_m * 1e3,
+              e.rounds);
+  EXPECT_GT(f.iou(e), 0.8);
+  EXPECT_LT(error_m, 0.003);
+  for (const char* stage : {"flow", "clustering", "scores", "odometry"})
+    EXPECT_FALSE(f.timings.samples(stage).empty()) << stage;
+}
+
+TEST(SegmentationLoop, AWrongFirstMotionIsRestartedFromTheFlow) {
+  LoopFixture f;
+  MotionEstimate e;
+  e.odometry.ok = true;  // a first odometry that converged to the wrong motion: 8 cm off
+  SE3 wrong = f.truth();
+  wrong.translation() += Eigen::Vector3d(0.08, 0.0, 0.0);
+  e.T_target_cur = wrong;
+  SegmentationLoop loop(f.config, f.scene->camera());
+  loop.run({f.cur_view->frame, f.cur, f.previous, f.target, SE3::Identity(), &f.map}, e, f.timings);
+  EXPECT_TRUE(e.restarted_from_flow);
+  const double error_m = translationNorm(f.truth().inverse() * e.T_target_cur);
+  std::printf("[ measured ] after the restart: mask IoU %.3f, translation error %.2f mm\n", f.iou(e), error_m * 1e3);
+  // Back from 80 mm to the two-frame odometry's own error: without the previous frame's scores
+  // (dropped with the rejected motion) the objects' pull leaves about 7 mm here.
+  EXPECT_LT(error_m, 0.01);
+}
+
+}  // namespace
+}  // namespace ff

@@ -1,0 +1,117 @@
+// The tracking-target policy on its own: which frame serves as the target, when a keyframe is
+// replaced, what weights a target carries, and the map's prediction as a target.
+#include <gtest/gtest.h>
+
+#include <optional>
+
+#include "flowfusion/pipeline/tracking_target.h"
+#include "flowfusion/synth/synthetic_scene.h"
+
+namespace ff {
+namespace {
+
+class TrackingTargetsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    synth::SynthConfig c;
+    c.frames = 12;
+    c.width = 160;
+    c.height = 120;
+    c.objects = 0;
+    scene_ = std::make_unique<synth::SyntheticScene>(c);
+  }
+  // Frame i at pose T (exact poses unless given).
+  TrackedFrame tracked(int i, std::optional<SE3> T = std::nullopt) const {
+    const auto f = scene_->render(i);
+    return {f.frame, prepareOdometryFrame(f.frame.intensity, f.frame.depth, scene_->camera(), odometry_),
+            T ? *T : f.T_world_cam, cv::Mat(), cv::Mat(), false};
+  }
+  OdometryConfig odometry_;
+  Timings timings_;
+  std::unique_ptr<synth::SyntheticScene> scene_;
+};
+
+TEST_F(TrackingTargetsTest, FrameToFrameAlwaysTargetsThePreviousFrame) {
+  PipelineOptions p;
+  p.tracking = TrackingMode::FrameToFrame;
+  TrackingTargets targets(p, odometry_, scene_->camera());
+  EXPECT_EQ(targets.previous(), nullptr);
+  for (int i = 0; i < 3; ++i) {
+    targets.advance(tracked(i), true, {}, nullptr, timings_);
+    const TrackingTarget t = targets.choose(nullptr, timings_);
+    EXPECT_EQ(t.odo, &targets.previous()->odo);
+    EXPECT_TRUE(t.T_world_target.isApprox(scene_->cameraPose(i)));
+    EXPECT_FALSE(t.from_model);
+  }
+}
+
+TEST_F(TrackingTargetsTest, AKeyframeStaysUntilTheCameraMovesFarEnough) {
+  PipelineOptions p;
+  p.keyframe_translation = 0.05;
+  p.model_keyframes = false;
+  TrackingTargets targets(p, odometry_, scene_->camera());
+  const SE3 start = scene_->cameraPose(0);
+  SE3 step = SE3::Identity();
+  step.translation() = Eigen::Vector3d(0.02, 0, 0);  // 2 cm per frame
+  SE3 T = start;
+  targets.advance(tracked(0, T), true, {}, nullptr, timings_);
+  for (int i = 1; i <= 2; ++i) {
+    T = T * step;
+    targets.advance(tracked(i, T), true, {}, nullptr, timings_);
+    EXPECT_TRUE(targets.choose(nullptr, timings_).T_world_target.isApprox(start)) << "frame " << i << ": 2-4 cm";
+  }
+  T = T * step;  // 6 cm from the keyframe: this frame becomes the keyframe
+  targets.advance(tracked(3, T), true, {}, nullptr, timings_);
+  EXPECT_TRUE(targets.choose(nullptr, timings_).T_world_target.isApprox(T));
+  // A frame whose tracking failed is always a new keyframe.
+  targets.advance(tracked(4, T), false, {}, nullptr, timings_);
+  EXPECT_EQ(targets.choose(nullptr, timings_).odo->level(1).intensity.data,
+            targets.previous()->odo.level(1).intensity.data);
+}
+
+TEST_F(TrackingTargetsTest, TargetsCarryTheirStaticWeights) {
+  PipelineOptions p;
+  p.model_keyframes = false;
+  TrackingTargets targets(p, odometry_, scene_->camera());
+  TrackedFrame f = tracked(0);
+  f.target_weights = cv::Mat(60, 80, CV_32F, cv::Scalar(0.25f));
+  targets.advance(std::move(f), true, {}, nullptr, timings_);
+  const TrackingTarget t = targets.choose(nullptr, timings_);
+  ASSERT_FALSE(t.weights->empty());
+  EXPECT_FLOAT_EQ(t.weights->at<float>(10, 10), 0.25f);
+}
+
+TEST_F(TrackingTargetsTest, ModelKeyframesAndFrameToModelRenderTheMap) {
+  StaticMap map;
+  for (int i = 0; i < 6; ++i) {
+    const auto f = scene_->render(i);
+    map.integrate(f.frame, scene_->camera(), f.T_world_cam);
+  }
+  PipelineOptions keyframes;
+  TrackingTargets with_keyframes(keyframes, odometry_, scene_->camera());
+  with_keyframes.advance(tracked(6), true, {}, &map, timings_);
+  const TrackingTarget k = with_keyframes.choose(&map, timings_);
+  EXPECT_TRUE(k.from_model);
+  // The rendered depth agrees with the frame's own where both exist (exact synthetic geometry).
+  const cv::Mat& rendered = k.odo->level(1).depth;
+  const cv::Mat& own = with_keyframes.previous()->odo.level(1).depth;
+  cv::Mat both = (rendered > 0) & (own > 0);
+  cv::Mat diff;
+  cv::absdiff(rendered, own, diff);
+  EXPECT_GT(cv::countNonZero(both), static_cast<int>(both.total() / 2));
+  EXPECT_LT(cv::mean(diff, both)[0], 0.02);
+
+  PipelineOptions model;
+  model.tracking = TrackingMode::FrameToModel;
+  TrackingTargets to_model(model, odometry_, scene_->camera());
+  to_model.advance(tracked(6), true, {}, &map, timings_);
+  const TrackingTarget m = to_model.choose(&map, timings_);
+  EXPECT_TRUE(m.from_model);
+  EXPECT_TRUE(m.weights->empty()) << "a rendered target has no moving objects";
+  EXPECT_FALSE(to_model.previousFrame().from_model);
+  StaticMap empty;
+  EXPECT_FALSE(to_model.choose(&empty, timings_).from_model) << "an empty map falls back to the previous frame";
+}
+
+}  // namespace
+}  // namespace ff
