@@ -94,6 +94,7 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
     if (o->no_noise) defaults.noise = false;
     const auto config = o->sources.resolve(defaults);
     checkSynthRange(config);
+    ff::setOutputCommand("synth");
     const auto t0 = std::chrono::steady_clock::now();
     const ff::synth::SyntheticScene scene(config);
     ff::synth::writeSequence(scene, o->out, o->overwrite);
@@ -148,6 +149,7 @@ const ff::app::RegisterCommand augment_command("51-augment", [](CLI::App& app) {
     o->sequence.undistort = !o->no_undistort;
     const auto t0 = std::chrono::steady_clock::now();
     ff::refuseOverlap(o->out, o->input, "the input sequence");
+    ff::setOutputCommand("augment");
     const auto report = ff::synth::augmentSequence(o->input, o->out, config, o->sequence, o->overwrite);
     if (!report.dropped_timestamps.empty()) {
       std::cerr << "augment: dropped " << report.dropped_timestamps.size()
