@@ -61,7 +61,7 @@ void requireExists(const std::filesystem::path& path, const std::string& what) {
   if (!std::filesystem::exists(path, ec)) throw MissingPath(what + " '" + path.string() + "' does not exist");
 }
 
-cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels) {
+MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels) {
   if (!dtypeMatches(array, cv_depth))
     throw BadArgument(name + ": expected dtype " + dtypeName(cv_depth) + ", got " + dtypeText(array));
   const bool shape_ok = channels == 1 ? array.ndim() == 2
@@ -70,10 +70,14 @@ cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_dep
     throw BadArgument(name + ": expected shape (H, W" + (channels == 1 ? std::string() : ", " + std::to_string(channels)) +
                       "), got " + shapeText(array));
   if (array.shape(0) == 0 || array.shape(1) == 0) throw BadArgument(name + ": the image is empty " + shapeText(array));
-  const py::array contiguous = py::array::ensure(array, py::array::c_style);
-  cv::Mat out(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), CV_MAKETYPE(cv_depth, channels));
-  std::memcpy(out.data, contiguous.data(), out.total() * out.elemSize());
-  return out;
+  MatView view{py::array::ensure(array, py::array::c_style), {}};
+  view.mat = cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)),
+                     CV_MAKETYPE(cv_depth, channels), const_cast<void*>(view.array.data()));
+  return view;
+}
+
+cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels) {
+  return viewOfArray(array, name, cv_depth, channels).mat.clone();
 }
 
 py::array arrayFromMat(const cv::Mat& mat) {

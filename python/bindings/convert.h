@@ -34,8 +34,17 @@ class BadArgument : public std::invalid_argument {
 // Throws MissingPath naming `what` when `path` does not exist.
 void requireExists(const std::filesystem::path& path, const std::string& what);
 
-// A C-contiguous copy of `array` as a cv::Mat: dtype T (exactly, else BadArgument naming `name`),
-// 2-D, or 3-D with `channels` channels when channels > 1.
+// A checked array seen as a cv::Mat: a header over the C-contiguous data of `array` (the argument
+// itself when it is C-contiguous, else a contiguous copy), valid while `array` lives. Reading it
+// needs no GIL.
+struct MatView {
+  py::array array;
+  cv::Mat mat;
+};
+// dtype exactly cv_depth's (else BadArgument naming `name`), 2-D, or 3-D with `channels` channels
+// when channels > 1, not empty.
+MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels);
+// The same checks, and a copy that owns its data.
 cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels);
 
 // An HxW or HxWxC array owning a copy of `mat` (CV_8U, CV_16U or CV_32F).

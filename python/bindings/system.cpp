@@ -97,25 +97,26 @@ FrameResult processArrays(PySystem& s, const py::array& rgb, const py::array& de
                           const py::object& depth_timestamp, double depth_scale) {
   const CameraIntrinsics& camera = s.system().camera();
   const bool grey = rgb.ndim() == 2;
-  const cv::Mat colour = matFromArray(rgb, "rgb", CV_8U, grey ? 1 : 3);
+  const MatView colour = viewOfArray(rgb, "rgb", CV_8U, grey ? 1 : 3);
   const bool raw = py::isinstance<py::array_t<uint16_t>>(depth);
   if (!raw && !py::isinstance<py::array_t<float>>(depth))
     throw BadArgument("depth: expected dtype uint16 (raw, depth_scale units per metre) or float32 (metres), got " +
                       py::str(depth.dtype()).cast<std::string>());
-  const cv::Mat d = matFromArray(depth, "depth", raw ? CV_16U : CV_32F, 1);
-  checkSize(colour, camera, "rgb");
-  checkSize(d, camera, "depth");
+  const MatView d = viewOfArray(depth, "depth", raw ? CV_16U : CV_32F, 1);
+  checkSize(colour.mat, camera, "rgb");
+  checkSize(d.mat, camera, "depth");
   if (!(depth_scale > 0 && std::isfinite(depth_scale))) throw BadArgument("depth_scale: must be a positive number");
   RgbdFrame frame;
   frame.timestamp = timestamp;
   if (!depth_timestamp.is_none()) frame.depth_timestamp = depth_timestamp.cast<double>();
+  // The views are read without the GIL (as NumPy's own functions do); they outlive `release`.
   py::gil_scoped_release release;
-  cv::cvtColor(colour, frame.color, grey ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
+  cv::cvtColor(colour.mat, frame.color, grey ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
   frame.intensity = intensityFromBgr(frame.color);
   if (raw) {
-    d.convertTo(frame.depth, CV_32F, 1.0 / depth_scale);
+    d.mat.convertTo(frame.depth, CV_32F, 1.0 / depth_scale);
   } else {
-    frame.depth = d;
+    frame.depth = d.mat.clone();
     cv::patchNaNs(frame.depth, 0.0);
     if (!cv::checkRange(frame.depth, true, nullptr, 0.0, 1e4))
       throw BadArgument("depth: float32 depth must be finite metres in [0, 10000] (0 or NaN = no measurement)");
