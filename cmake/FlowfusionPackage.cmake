@@ -20,6 +20,6 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 # The static libraries and headers need the dependencies' development packages; the executable
 # needs their runtime libraries, which these pull in.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
-    "libeigen3-dev, libopencv-dev, libopencv-contrib-dev, libpcl-dev, libopen3d-dev, nlohmann-json3-dev, libspdlog-dev, libfmt-dev, libtbb-dev")
+    "libeigen3-dev, libopencv-dev, libopencv-contrib-dev, libpcl-dev, libopen3d-dev, nlohmann-json3-dev, libspdlog-dev, libfmt-dev, libtbb-dev, python3, python3-numpy")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 include(CPack)

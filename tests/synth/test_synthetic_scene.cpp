@@ -287,7 +287,8 @@ TEST(SyntheticScene, SameSeedGivesIdenticalFiles) {
     EXPECT_EQ(readBytes(e.path()), readBytes(tmp.path() / "b" / rel)) << rel;
     ++files;
   }
-  EXPECT_EQ(files, 3 * 3 + 5);  // rgb, depth, mask per frame; 2 lists, groundtruth, camera, scene.json
+  // rgb, depth, mask per frame; 2 lists, groundtruth, camera, scene.json, the output manifest
+  EXPECT_EQ(files, 3 * 3 + 6);
   SynthConfig other = c;
   other.seed = 12;
   ff::synth::writeSequence(SyntheticScene(other), (tmp.path() / "c").string());

@@ -261,6 +261,43 @@ int SceneModel::addTexture(Material m, Rng& rng) {
   return static_cast<int>(textures.size()) - 1;
 }
 
+namespace {
+
+// An item's bounds projected to a pixel rectangle; the whole image when a corner is near or
+// behind the camera.
+cv::Rect2d screenRect(const Item& item, const SE3& T_cam_item, const CameraIntrinsics& camera) {
+  double u0 = kInf, v0 = kInf, u1 = -kInf, v1 = -kInf;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p_i(c & 1 ? item.hi.x() : item.lo.x(), c & 2 ? item.hi.y() : item.lo.y(),
+                              c & 4 ? item.hi.z() : item.lo.z());
+    const Eigen::Vector3d p_c = T_cam_item * p_i;
+    if (p_c.z() < 0.05) return cv::Rect2d(0, 0, camera.width, camera.height);
+    const Eigen::Vector2d px = camera.project(p_c);
+    u0 = std::min(u0, px.x());
+    v0 = std::min(v0, px.y());
+    u1 = std::max(u1, px.x());
+    v1 = std::max(v1, px.y());
+  }
+  return cv::Rect2d(u0 - 1, v0 - 1, u1 - u0 + 2, v1 - v0 + 2);
+}
+
+// The colour of a hit: the part's texture, filtered over the pixel's footprint, times the light.
+cv::Vec3f shadeHit(const SceneModel& m, const Part& part, const Ray& ray_w, double t, const Eigen::Vector3d& p_w,
+                   const Eigen::Vector3d& n_w, const Eigen::Vector2d& uv, double cos_i, double pixel_angle) {
+  const double dist = t * ray_w.d.norm();
+  const double footprint = dist * pixel_angle / std::sqrt(std::max(cos_i, 0.05));
+  const cv::Vec3f albedo =
+      m.textures[part.texture].sample(uv.x() + part.offset_m.x(), uv.y() + part.offset_m.y(), footprint) * part.albedo;
+  const Eigen::Vector3d to_light = m.light.position - p_w;
+  const double l = to_light.norm();
+  const double ndl = std::max(0.0, n_w.dot(to_light) / l);
+  const double f2 = m.light.falloff_m * m.light.falloff_m;
+  const double shade = m.light.ambient + m.light.diffuse * ndl * f2 / (f2 + l * l);
+  return albedo * static_cast<float>(shade);
+}
+
+}  // namespace
+
 RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const CameraIntrinsics& camera) const {
   const int W = camera.width, H = camera.height;
   RenderedLayer out;
@@ -289,26 +326,11 @@ RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const Came
   // a corner is near or behind the camera); every tile of rows x columns tests only the items
   // whose rectangle overlaps it.
   const SE3 T_cam_world = T_world_cam.inverse();
-  const auto screenRect = [&](const Item& item, const SE3& T_cam_item) {
-    cv::Rect2d r(0, 0, W, H);
-    double u0 = kInf, v0 = kInf, u1 = -kInf, v1 = -kInf;
-    for (int c = 0; c < 8; ++c) {
-      const Eigen::Vector3d p_i(c & 1 ? item.hi.x() : item.lo.x(), c & 2 ? item.hi.y() : item.lo.y(),
-                                c & 4 ? item.hi.z() : item.lo.z());
-      const Eigen::Vector3d p_c = T_cam_item * p_i;
-      if (p_c.z() < 0.05) return r;
-      const Eigen::Vector2d px = camera.project(p_c);
-      u0 = std::min(u0, px.x());
-      v0 = std::min(v0, px.y());
-      u1 = std::max(u1, px.x());
-      v1 = std::max(v1, px.y());
-    }
-    return cv::Rect2d(u0 - 1, v0 - 1, u1 - u0 + 2, v1 - v0 + 2);
-  };
   std::vector<cv::Rect2d> furniture_rect, object_rect;
-  for (const Item& item : furniture) furniture_rect.push_back(screenRect(item, T_cam_world));
+  for (const Item& item : furniture) furniture_rect.push_back(screenRect(item, T_cam_world, camera));
   for (size_t k = 0; k < objects.size(); ++k)
-    object_rect.push_back(screenRect(objects[k].shape, T_cam_world * objects[k].path->T_world_object(time_s)));
+    object_rect.push_back(
+        screenRect(objects[k].shape, T_cam_world * objects[k].path->T_world_object(time_s), camera));
   constexpr int kTile = 16;
   const int tiles_x = (W + kTile - 1) / kTile, tiles_y = (H + kTile - 1) / kTile;
 
@@ -379,19 +401,8 @@ RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const Came
           n_w[hit.axis] = ray_w.d[hit.axis] > 0 ? -1.0 : 1.0;
           uv = faceUv(p_w, hit.axis);
         }
-        const double dist = hit.t * ray_w.d.norm();
         const double cos_i = std::fabs(n_w.dot(ray_w.d)) / ray_w.d.norm();
-        const double footprint = dist * pixel_angle / std::sqrt(std::max(cos_i, 0.05));
-        const Part& part = *hit.part;
-        const cv::Vec3f albedo =
-            textures[part.texture].sample(uv.x() + part.offset_m.x(), uv.y() + part.offset_m.y(), footprint) *
-            part.albedo;
-        const Eigen::Vector3d to_light = light.position - p_w;
-        const double l = to_light.norm();
-        const double ndl = std::max(0.0, n_w.dot(to_light) / l);
-        const double f2 = light.falloff_m * light.falloff_m;
-        const double shade = light.ambient + light.diffuse * ndl * f2 / (f2 + l * l);
-        col[u] = albedo * static_cast<float>(shade);
+        col[u] = shadeHit(*this, *hit.part, ray_w, hit.t, p_w, n_w, uv, cos_i, pixel_angle);
         dep[u] = static_cast<float>(hit.t);
         oid[u] = static_cast<uint8_t>(hit.object + 1);
         cosi[u] = static_cast<float>(cos_i);
