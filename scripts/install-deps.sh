@@ -11,7 +11,7 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev \
   libspdlog-dev libfmt-dev libtbb-dev \
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-distributed \
-  libjs-three chromium
+  libjs-three chromium xvfb
 # ROS 1 bags (`flowfusion run FILE.bag`, `flowfusion convert`): rosbag storage and the sensor_msgs
 # headers; without them flowfusion builds and says how to enable bags when given one.
 $SUDO apt-get install -y -qq --no-install-recommends librosbag-storage-dev libsensor-msgs-dev
