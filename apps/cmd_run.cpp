@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "command.h"
+#include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/pipeline/files_sink.h"
 #include "flowfusion/pipeline/run.h"
@@ -72,6 +73,8 @@ void execute(const RunCommand& c) {
   files.write_overlays = c.overlays;
   files.export_map = !c.no_map;
   FilesSink sink(files);
+  refuseOverlap(c.out, c.sequence, "the input sequence");
+  setOutputCommand("run");
   const std::unique_ptr<FrameSource> source = c.system.openSource(c.sequence);
   ProgressSink progress;
   std::vector<ResultSink*> sinks = {&sink};

@@ -81,6 +81,20 @@ TEST(HostileInputs, FullDiskIsAnErrorAndLeavesNoEmptyFiles) {
   ::umount(tmp.str().c_str());
 }
 
+// Case 1 for run: masks fill the 64 KiB (16 pages) before the trajectory is written.
+TEST(HostileInputs, RunOnAFullDiskIsAnErrorAndLeavesNoEmptyFiles) {
+  testing::TempDir tmp;
+  const fs::path seq = tmp.path() / "seq", disk = tmp.path() / "disk";
+  ASSERT_EQ(runFlowfusion("synth " + q(seq) + " --width 160 --height 120 --frames 30 --seed 3").status, 0);
+  fs::create_directories(disk);
+  if (::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=64k") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root)";
+  const auto r = runFlowfusion("run " + q(seq) + " --quiet --out " + q(disk / "out"));
+  expectError(r, "No space left on device");
+  expectNoEmptyOrTemporaryFiles(disk / "out");
+  ::umount(disk.c_str());
+}
+
 // Case 1 without root: a file-size limit makes every write past 16 KiB fail (EFBIG).
 TEST(HostileInputs, FileSizeLimitIsAnErrorAndLeavesNoEmptyFiles) {
   testing::TempDir tmp;
@@ -123,6 +137,49 @@ TEST(HostileInputs, OverwriteLeavesNoStaleFilesAndKeepsTheUsers) {
   EXPECT_EQ(filesIn(out / "depth"), 3u);
   EXPECT_TRUE(fs::exists(out / "my_notes.txt"));
   expectNoEmptyOrTemporaryFiles(out);
+}
+
+// Case 2 for run: the sequence's ground-truth masks are never replaced by estimates.
+TEST(HostileInputs, RunIntoItsInputIsRefused) {
+  testing::TempDir tmp;
+  const fs::path seq = makeSequence(tmp.path() / "seq");
+  fs::create_directories(seq / "masks");
+  cv::imwrite((seq / "masks" / "1.000000.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255)));
+  const auto before = fs::last_write_time(seq / "masks" / "1.000000.png");
+  expectError(runFlowfusion("run " + q(seq) + " --out " + q(seq) + " --overwrite --quiet"), "is the input sequence");
+  expectError(runFlowfusion("run " + q(seq) + " --out " + q(seq / "out") + " --quiet"), "lies inside the input");
+  EXPECT_EQ(fs::last_write_time(seq / "masks" / "1.000000.png"), before);
+  EXPECT_EQ(filesIn(seq / "masks"), 1u);
+  EXPECT_FALSE(fs::exists(seq / "out"));
+  EXPECT_FALSE(fs::exists(seq / "trajectory.txt"));
+}
+
+// Case 3 for run, and --overwrite refusing another command's output.
+TEST(HostileInputs, RunOverwriteRemovesOnlyItsOwnEarlierFiles) {
+  testing::TempDir tmp;
+  const fs::path seq = tmp.path() / "seq", out = tmp.path() / "out";
+  ASSERT_EQ(runFlowfusion("synth " + q(seq) + " --width 160 --height 120 --frames 6 --seed 3").status, 0);
+  ASSERT_EQ(runFlowfusion("run " + q(seq) + " --quiet --no-map --out " + q(out)).status, 0);
+  EXPECT_EQ(filesIn(out / "masks"), 6u);
+  std::ofstream(out / "my_notes.txt") << "the user's";
+  const auto r = runFlowfusion("run " + q(seq) + " --quiet --no-map --frames 0:1 --overwrite --out " + q(out));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(filesIn(out / "masks"), 2u);
+  EXPECT_TRUE(fs::exists(out / "my_notes.txt"));
+  expectNoEmptyOrTemporaryFiles(out);
+  // A run may not overwrite a synthetic sequence (another command's output) with --overwrite.
+  const fs::path other = makeSequence(tmp.path() / "other");
+  expectError(runFlowfusion("run " + q(other) + " --quiet --overwrite --out " + q(seq)),
+              "holds the output of 'flowfusion synth'");
+  EXPECT_EQ(filesIn(seq / "rgb"), 6u);
+}
+
+// Case 11: an empty output folder name.
+TEST(HostileInputs, EmptyOutputNameIsRefused) {
+  testing::TempDir tmp;
+  const fs::path seq = makeSequence(tmp.path() / "seq");
+  expectError(runFlowfusion("run " + q(seq) + " --out ''"), "output folder name is empty");
+  expectError(runFlowfusion("synth '' --frames 2"), "output folder name is empty");
 }
 
 // Case 6.
