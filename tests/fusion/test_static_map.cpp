@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/io/PointCloudIO.h>
@@ -272,6 +274,35 @@ TEST(StaticMap, ExportedFilesLoadInOpen3d) {
   EXPECT_EQ(cloud.points_.size(), map.points().positions.size());
   EXPECT_TRUE(cloud.HasColors());
   EXPECT_TRUE(cloud.HasNormals());
+}
+
+TEST(StaticMap, MeshAtCentimetreVoxelsLiesOnTheRoomFacesTheCameraAndRepeats) {
+  RoomFixture room;
+  room.frames = 10;
+  const StaticMap map = fuse(room, false);
+  testing::TempDir dir;
+  const std::string path = dir.str() + "/map.ply", again = dir.str() + "/again.ply";
+  map.exportMesh(path);
+  map.exportMesh(again);
+  open3d::geometry::TriangleMesh mesh;
+  ASSERT_TRUE(open3d::io::ReadTriangleMesh(path, mesh));
+  ASSERT_GT(mesh.triangles_.size(), 10000u);
+  double err = 0;
+  for (const auto& v : mesh.vertices_) err += room.distanceToRoom(v);
+  EXPECT_LT(err / mesh.vertices_.size(), 0.003);  // exact data: the surfels' own error and the voxels'
+  // Seen from inside, every wall's front faces the camera.
+  const Eigen::Vector3d camera = room.pose(0).translation();
+  size_t facing = 0;
+  for (const Eigen::Vector3i& t : mesh.triangles_) {
+    const Eigen::Vector3d a = mesh.vertices_[t(0)], b = mesh.vertices_[t(1)], c = mesh.vertices_[t(2)];
+    if ((b - a).cross(c - a).dot(camera - a) > 0) ++facing;
+  }
+  EXPECT_GT(facing, 0.99 * mesh.triangles_.size());
+  const auto bytes = [](const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(bytes(path), bytes(again));
 }
 
 TEST(StaticMap, MemoryBudgetStopsGrowthWithAFlag) {

@@ -12,8 +12,8 @@
 // Surfels that never become stable (confidence below stable_confidence within
 // unstable_window_frames) are removed too. A background that was occluded gets new surfels as
 // soon as it is seen with weight.
-// A triangle mesh is made at export time by integrating the model's own predictions at the stored
-// keyframe poses into an Open3D ScalableTSDFVolume (CPU), so the mesh holds only static surfels.
+// A triangle mesh is made at export time from the stable surfels alone (surfel_mesh.h: their planes
+// through a sparse TSDF, then marching cubes), so it holds only the static surfaces.
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
@@ -62,12 +62,12 @@ struct FusionConfig {
   // Memory budget: at most this many surfels (about 64 bytes each). When reached no new surfels
   // are added (existing ones still update), budgetReached() turns true and one warning is logged.
   int max_surfels = 3000000;
-  // A new keyframe pose (used for the mesh export) is stored when the camera moved this far from
+  // A new keyframe pose (used for the previews) is stored when the camera moved this far from
   // the last one; at most max_keyframes are kept (evenly thinned beyond that).
   double keyframe_distance_m = 0.1;
   double keyframe_angle_deg = 10.0;
   int max_keyframes = 60;
-  // Mesh export: TSDF voxel size and truncation, metres.
+  // Mesh export: voxel size of the surfels' TSDF, and the bound on its signed distances, metres.
   double mesh_voxel_m = 0.01;
   double mesh_truncation_m = 0.04;
 };
@@ -145,7 +145,7 @@ class StaticMap {
   int framesIntegrated() const { return frame_index_; }
   const std::vector<Surfel>& surfels() const { return surfels_; }
   const FusionConfig& config() const { return config_; }
-  // Camera poses kept for the mesh export and the previews.
+  // Camera poses kept for the previews.
   const std::vector<SE3>& keyframePoses() const { return keyframes_; }
   // The camera of the last integrated frame.
   const CameraIntrinsics& keyframeCamera() const { return keyframe_camera_; }

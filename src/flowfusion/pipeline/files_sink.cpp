@@ -1,5 +1,6 @@
 #include "flowfusion/pipeline/files_sink.h"
 
+#include <chrono>
 #include <filesystem>
 
 #include "flowfusion/core/atomic_file.h"
@@ -46,9 +47,11 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
     summary.notes.push_back("no map written: the map holds no stable surfels (too few frames or no valid depth)");
     return;
   }
+  const auto start = std::chrono::steady_clock::now();
   map.exportMesh((out / "map.ply").string());
   map.exportPointCloud((out / "map_points.ply").string());
   writePreviews(map, (out / "preview").string());
+  summary.export_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   summary.written.push_back((out / "map.ply").string());
   summary.written.push_back((out / "map_points.ply").string());
   summary.written.push_back((out / "preview").string() + "/");
@@ -79,6 +82,7 @@ void FilesSink::writeSummary(RunSummary& summary) const {
   j["map_budget_reached"] = summary.map_budget_reached;
   j["peak_memory_mib"] = summary.peak_memory_mib;
   j["load_ms_median"] = summary.load_ms_median;
+  j["export_ms"] = summary.export_ms;
   j["timings"] = summary.timings.toJson()["stages"];
   j["notes"] = summary.notes;
   const std::string path = (fs::path(options_.out_dir) / "summary.json").string();

@@ -30,6 +30,7 @@ struct RunSummary {
   int flow_restarts = 0;      // frames whose odometry restarted from the flow's rigid consensus
   double mean_rounds = 0;     // segmentation <-> odometry rounds per frame (FrameResult::iterations)
   double load_ms_median = 0;  // reading and decoding frames, not part of the pipeline
+  double export_ms = 0;       // writing map.ply, map_points.ply and preview/ after the last frame (0: none)
   Timings timings;
   double peak_memory_mib = 0;
   size_t map_surfels = 0;
