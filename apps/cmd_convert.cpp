@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "command.h"
+#include "flowfusion/core/output_folder.h"
 #include "flowfusion/io/bag_convert.h"
 
 namespace {
@@ -28,6 +29,8 @@ const ff::app::RegisterCommand convert_command("55-convert", [](CLI::App& app) {
   cmd->add_option("--groundtruth", o->sequence.groundtruth, "TUM groundtruth.txt to copy into the folder");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] {
+    ff::refuseOverlap(o->out, o->bag, "the input bag");
+    ff::setOutputCommand("convert");
     const ff::BagConversion c = ff::convertBagToTum(o->bag, o->out, o->sequence, o->overwrite);
     std::cout << "convert: wrote " << c.frames << " frames (" << c.color_topic << ", " << c.depth_topic << ") to "
               << o->out << '\n';

@@ -6,12 +6,15 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 #include "command.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/pipeline/files_sink.h"
 #include "flowfusion/pipeline/run.h"
+#include "flowfusion/report/report_sink.h"
+#include "flowfusion/report/viewer_sink.h"
 #include "sequence_options.h"
 
 namespace ff::app {
@@ -43,7 +46,7 @@ class ProgressSink : public ResultSink {
 
 struct RunCommand {
   std::string sequence, out;
-  bool overwrite = false, overlays = false, no_map = false, quiet = false;
+  bool overwrite = false, overlays = false, no_map = false, quiet = false, report = false, show = false;
   SystemOptions system;
 };
 
@@ -79,6 +82,13 @@ void execute(const RunCommand& c) {
   ProgressSink progress;
   std::vector<ResultSink*> sinks = {&sink};
   if (!c.quiet && isatty(fileno(stderr))) sinks.push_back(&progress);
+  report::ViewerSink viewer;
+  if (c.show) sinks.push_back(&viewer);
+  report::ReportOptions report_options;
+  report_options.run_dir = c.out;
+  if (std::filesystem::is_directory(c.sequence)) report_options.sequence = c.sequence;
+  report::ReportSink report(report_options);
+  if (c.report) sinks.push_back(&report);  // after the files sink, whose files it reads
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   const RunSummary s = runSequence(*source, config, sinks, {&g_stop, &g_reason});
@@ -94,13 +104,17 @@ void execute(const RunCommand& c) {
 
 const RegisterCommand reg("1-run", [](CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
-  CLI::App* cmd = app.add_subcommand("run", "Track a TUM-layout RGB-D sequence, segment moving objects, map the static scene");
-  cmd->add_option("sequence", c->sequence, "Sequence folder (rgb.txt, depth.txt, rgb/, depth/)")->required();
+  CLI::App* cmd =
+      app.add_subcommand("run", "Track an RGB-D sequence (folder or ROS bag), segment moving objects, map the static scene");
+  cmd->add_option("sequence", c->sequence, "Sequence folder (TUM, Bonn, ICL-NUIM, ETH3D layouts) or .bag file")
+      ->required();
   cmd->add_option("--out", c->out, "Output folder (trajectory.txt, masks/, map.ply, ...)")->required();
   cmd->add_flag("--overwrite", c->overwrite, "Write into a non-empty output folder");
   cmd->add_flag("--overlays", c->overlays, "Also write overlays/<timestamp>.png (dynamic pixels in red)");
   cmd->add_flag("--no-map", c->no_map, "Skip map.ply, map_points.ply and preview/");
   cmd->add_flag("--quiet", c->quiet, "Print nothing on success");
+  cmd->add_flag("--report", c->report, "Also write OUT/report.html (see `flowfusion report`)");
+  cmd->add_flag("--show", c->show, "Show the frame with its mask, the dynamic score and the path while running");
   c->system.addTo(cmd);
   cmd->callback([c]() { execute(*c); });
 });

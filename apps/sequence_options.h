@@ -16,6 +16,8 @@ namespace ff::app {
 struct SystemOptions {
   std::string camera;
   double depth_scale = 5000.0;
+  CLI::Option* depth_scale_option = nullptr;  // tells whether --depth-scale was given
+  std::string rgb_topic, depth_topic, groundtruth;  // bags
   ConfigSources config;
   std::string frames;
   bool no_segmentation = false;
@@ -27,7 +29,11 @@ struct SystemOptions {
                     "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]] (default: camera.txt or "
                     "folder name)");
     cmd->add_flag("--no-undistort", no_undistort, "Feed the raw images to the pinhole model (ignore lens distortion)");
-    cmd->add_option("--depth-scale", depth_scale, "Raw depth units per metre")->capture_default_str();
+    depth_scale_option = cmd->add_option("--depth-scale", depth_scale,
+                                         "Raw depth units per metre (folders: 5000; bags' 16UC1: 1000)");
+    cmd->add_option("--rgb-topic", rgb_topic, "Bag: colour image topic (default: found by name)");
+    cmd->add_option("--depth-topic", depth_topic, "Bag: depth image topic (default: found by name)");
+    cmd->add_option("--groundtruth", groundtruth, "Bag: ground-truth trajectory (TUM groundtruth.txt)");
     config.addTo(cmd, "SystemConfig");
     cmd->add_option("--frames", frames, "FIRST:LAST frame indices (inclusive)");
     cmd->add_flag("--no-segmentation", no_segmentation, "Plain robust odometry, no dynamic segmentation");
@@ -40,6 +46,10 @@ struct SystemOptions {
     SequenceOptions s;
     s.camera = camera;
     s.depth_scale = depth_scale;
+    if (depth_scale_option && depth_scale_option->count() > 0) s.bag_depth_scale = depth_scale;
+    s.rgb_topic = rgb_topic;
+    s.depth_topic = depth_topic;
+    s.groundtruth = groundtruth;
     s.undistort = !no_undistort;
     return s;
   }

@@ -21,5 +21,8 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 # needs their runtime libraries, which these pull in.
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
     "libeigen3-dev, libopencv-dev, libopencv-contrib-dev, libpcl-dev, libopen3d-dev, nlohmann-json3-dev, libspdlog-dev, libfmt-dev, libtbb-dev, python3, python3-numpy")
+if(FLOWFUSION_ROSBAG_FOUND)
+  string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", librosbag-storage-dev, libsensor-msgs-dev")
+endif()
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 include(CPack)

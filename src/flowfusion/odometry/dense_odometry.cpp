@@ -18,19 +18,27 @@ void validate(const OdometryConfig& c) {
   const auto require = [](bool ok, const std::string& what) {
     if (!ok) throw InputError("odometry." + what);
   };
+  // Finite and in (lo, hi].
+  const auto within = [](double v, double lo, double hi) { return std::isfinite(v) && v > lo && v <= hi; };
   require(c.levels >= 1 && c.levels <= 8, "levels must be in [1, 8]");
   require(c.finest_level >= 0 && c.finest_level < c.levels, "finest_level must be in [0, levels)");
-  require(c.max_iterations >= 1 && c.max_iterations_finest >= 1,
-          "max_iterations and max_iterations_finest must be at least 1");
-  require(c.alpha_I >= 0, "alpha_I must be non-negative");
-  require(c.sigma_I > 0, "sigma_I must be positive");
-  require(c.cauchy_c > 0, "cauchy_c must be positive");
+  require(c.max_iterations >= 1 && c.max_iterations <= 1000 && c.max_iterations_finest >= 1 &&
+              c.max_iterations_finest <= 1000,
+          "max_iterations and max_iterations_finest must be 1 to 1000");
+  require(c.alpha_I >= 0 && std::isfinite(c.alpha_I), "alpha_I must be a finite value >= 0");
+  require(within(c.sigma_I, 0, 1e3), "sigma_I must be in (0, 1000]");
+  require(within(c.cauchy_c, 0, 1e3), "cauchy_c must be in (0, 1000]");
   require(c.use_intensity || c.use_depth, "use_intensity and use_depth cannot both be false");
-  require(c.depth_sigma_a > 0 && c.depth_sigma_b >= 0, "depth_sigma_a must be positive, depth_sigma_b non-negative");
-  require(c.min_depth > 0 && c.max_depth > c.min_depth, "min_depth must be positive and below max_depth");
+  require(within(c.depth_sigma_a, 0, 10) && c.depth_sigma_b >= 0 && c.depth_sigma_b <= 10,
+          "depth_sigma_a must be in (0, 10] m and depth_sigma_b in [0, 10] 1/m");
+  require(c.depth_slope_sigma >= 0 && c.depth_slope_sigma <= 100, "depth_slope_sigma must be in [0, 100] px");
+  require(within(c.min_depth, 0, 100) && within(c.max_depth, c.min_depth, 1000),
+          "min_depth must be positive and below max_depth (metres)");
+  require(within(c.convergence_eps, 0, 1), "convergence_eps must be in (0, 1]");
   require(c.occlusion_ratio >= 0 && c.occlusion_ratio < 1, "occlusion_ratio must be in [0, 1) (0 turns it off)");
   require(c.min_valid_fraction >= 0 && c.min_valid_fraction < 1, "min_valid_fraction must be in [0, 1)");
-  require(c.max_translation > 0 && c.max_rotation_deg > 0, "max_translation and max_rotation_deg must be positive");
+  require(within(c.max_translation, 0, 1e3) && within(c.max_rotation_deg, 0, 180),
+          "max_translation must be in (0, 1000] m and max_rotation_deg in (0, 180] deg");
 }
 
 OdometryFrame prepareOdometryFrame(const cv::Mat& intensity, const cv::Mat& depth, const CameraIntrinsics& camera,
