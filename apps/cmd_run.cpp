@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "command.h"
+#include "flowfusion/core/error.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/pipeline/files_sink.h"
@@ -55,10 +56,14 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
               s.tracking_failures, s.flow_restarts);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
   std::printf(" (mean total %.1f ms)\n", mean(s.timings.frameTotals()));
-  if (source.groundtruth() && !s.trajectory.empty()) {
-    const auto ate = eval::computeAte(*source.groundtruth(), s.trajectory);
-    std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,
-                ate.matched_poses);
+  if (source.groundtruth()) {
+    try {
+      const auto ate = eval::computeAte(*source.groundtruth(), s.trajectory);
+      std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,
+                  ate.matched_poses);
+    } catch (const InputError& e) {
+      std::printf("ATE: not computed: %s\n", e.what());  // e.g. too few poses to align
+    }
   }
   std::printf("map: %zu surfels%s; peak memory %.0f MiB\n", s.map_surfels,
               s.map_budget_reached ? " (budget reached: raise fusion.max_surfels for more)" : "", s.peak_memory_mib);
