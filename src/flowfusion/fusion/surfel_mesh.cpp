@@ -46,8 +46,8 @@ int localIndex(const Eigen::Vector3i& g, const Eigen::Vector3i& block) {
   return (l.z() * kBlock + l.y()) * kBlock + l.x();
 }
 
-// Voxels in blocks allocated where surfels are; the last block used is cached (neighbouring
-// lookups mostly fall into it).
+// Voxels in blocks allocated where surfels are; the last block written is cached (a surfel's
+// neighbourhood mostly falls into it).
 class SparseTsdf {
  public:
   Voxel& at(const Eigen::Vector3i& g) {
@@ -61,16 +61,9 @@ class SparseTsdf {
     }
     return (*cached_)[localIndex(g, b)];
   }
-  const Voxel* find(const Eigen::Vector3i& g) {
-    const Eigen::Vector3i b(floorDiv(g.x()), floorDiv(g.y()), floorDiv(g.z()));
-    const uint64_t key = pack(b);
-    if (key != cached_key_ || !cached_) {
-      const auto it = index_.find(key);
-      if (it == index_.end()) return nullptr;
-      cached_key_ = key;
-      cached_ = &blocks_[it->second];
-    }
-    return &(*cached_)[localIndex(g, b)];
+  const Block* findBlock(const Eigen::Vector3i& b) const {
+    const auto it = index_.find(pack(b));
+    return it == index_.end() ? nullptr : &blocks_[it->second];
   }
   // Block coordinates in increasing key order (the mesh's vertex order must not depend on hashing).
   std::vector<Eigen::Vector3i> sortedBlocks() const {
@@ -115,18 +108,31 @@ void integrateSurfel(SparseTsdf& tsdf, const Surfel& s, float voxel, float trunc
 }
 
 // Marching cubes over every cube whose eight corners carry weight; a vertex per crossed grid edge,
-// shared between the cubes around it.
+// shared between the cubes around it. A block's cubes reach into the 7 blocks above it, looked up
+// once per block.
 class CubeMarcher {
  public:
-  CubeMarcher(SparseTsdf& tsdf, float voxel, SurfelMesh& mesh) : tsdf_(tsdf), voxel_(voxel), mesh_(mesh) {}
+  CubeMarcher(const SparseTsdf& tsdf, float voxel, SurfelMesh& mesh) : tsdf_(tsdf), voxel_(voxel), mesh_(mesh) {}
 
-  void cube(const Eigen::Vector3i& origin) {
+  void block(const Eigen::Vector3i& b) {
+    for (int n = 0; n < 8; ++n) neighbour_[n] = tsdf_.findBlock(b + Eigen::Vector3i(n & 1, (n >> 1) & 1, n >> 2));
+    for (int z = 0; z < kBlock; ++z)
+      for (int y = 0; y < kBlock; ++y)
+        for (int x = 0; x < kBlock; ++x) cube(b, Eigen::Vector3i(x, y, z));
+  }
+
+ private:
+  void cube(const Eigen::Vector3i& b, const Eigen::Vector3i& local) {
+    const Eigen::Vector3i origin = kBlock * b + local;
     const Voxel* corner[8];
     float f[8];
     int index = 0;
     for (int i = 0; i < 8; ++i) {
-      corner[i] = tsdf_.find(origin + shift[i]);
-      if (!corner[i] || corner[i]->weight <= 0) return;
+      const Eigen::Vector3i l = local + shift[i];
+      const Block* block = neighbour_[(l.x() / kBlock) + 2 * (l.y() / kBlock) + 4 * (l.z() / kBlock)];
+      if (!block) return;
+      corner[i] = &(*block)[((l.z() % kBlock) * kBlock + l.y() % kBlock) * kBlock + l.x() % kBlock];
+      if (corner[i]->weight <= 0) return;
       f[i] = corner[i]->sdf_sum / corner[i]->weight;
       if (f[i] < 0) index |= 1 << i;
     }
@@ -139,7 +145,6 @@ class CubeMarcher {
                                  vertex[tri_table[index][i + 1]]});
   }
 
- private:
   int32_t edgeVertex(const Eigen::Vector3i& origin, int e, const Voxel* const* corner, const float* f) {
     const Eigen::Vector3i start = origin + edge_shift[e].head<3>();
     const uint64_t key = (pack(start) << 2) | static_cast<uint64_t>(edge_shift[e](3));
@@ -158,7 +163,8 @@ class CubeMarcher {
     return it->second;
   }
 
-  SparseTsdf& tsdf_;
+  const SparseTsdf& tsdf_;
+  const Block* neighbour_[8] = {};
   float voxel_;
   SurfelMesh& mesh_;
   std::unordered_map<uint64_t, int32_t> vertex_of_edge_;
@@ -179,10 +185,7 @@ SurfelMesh meshSurfels(const std::vector<Surfel>& surfels, double stable_confide
     if (s.confidence >= stable_confidence) integrateSurfel(tsdf, s, voxel, truncation);
   SurfelMesh mesh;
   CubeMarcher marcher(tsdf, voxel, mesh);
-  for (const Eigen::Vector3i& block : tsdf.sortedBlocks())
-    for (int z = 0; z < kBlock; ++z)
-      for (int y = 0; y < kBlock; ++y)
-        for (int x = 0; x < kBlock; ++x) marcher.cube(kBlock * block + Eigen::Vector3i(x, y, z));
+  for (const Eigen::Vector3i& block : tsdf.sortedBlocks()) marcher.block(block);
   return mesh;
 }
 
