@@ -20,37 +20,10 @@ namespace ff {
 namespace {
 
 using testing::CommandResult;
+using testing::makeTinySequence;
 using testing::runFlowfusion;
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
-// Runs `shell_prefix; flowfusion args` in sh (for ulimit and trap).
-CommandResult runInShell(const std::string& shell_prefix, const std::string& args) {
-  const std::string cmd = "sh -c \"" + shell_prefix + "; exec " + FLOWFUSION_APP_PATH + " " + args + "\" 2>&1";
-  CommandResult r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int st = pclose(pipe);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-  return r;
-}
-
-// A valid two-frame 64x48 sequence with camera.txt.
-fs::path makeSequence(const fs::path& root) {
-  fs::create_directories(root / "rgb");
-  fs::create_directories(root / "depth");
-  std::ofstream rgb(root / "rgb.txt"), depth(root / "depth.txt");
-  for (const char* t : {"1.000000", "1.033333"}) {
-    cv::imwrite((root / "rgb" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160)));
-    cv::imwrite((root / "depth" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_16U, cv::Scalar(6000)));
-    rgb << t << " rgb/" << t << ".png\n";
-    depth << t << " depth/" << t << ".png\n";
-  }
-  std::ofstream(root / "camera.txt") << "50 50 31.5 23.5 64 48\n";
-  return root;
-}
 
 // Every regular file under dir: none empty, none a leftover temporary of the atomic writer.
 void expectNoEmptyOrTemporaryFiles(const fs::path& dir) {
@@ -99,8 +72,8 @@ TEST(HostileInputs, RunOnAFullDiskIsAnErrorAndLeavesNoEmptyFiles) {
 TEST(HostileInputs, FileSizeLimitIsAnErrorAndLeavesNoEmptyFiles) {
   testing::TempDir tmp;
   const fs::path out = tmp.path() / "synth";
-  const auto r = runInShell("trap '' XFSZ; ulimit -f 16",
-                            "synth " + q(out) + " --frames 3 --width 320 --height 240 --seed 2");
+  const auto r = runFlowfusion("synth " + q(out) + " --frames 3 --width 320 --height 240 --seed 2",
+                               "trap '' XFSZ; ulimit -f 16");
   expectError(r, "File too large");
   expectNoEmptyOrTemporaryFiles(out);
 }
@@ -112,7 +85,7 @@ size_t filesIn(const fs::path& dir) {
 // Case 2: augment into its own input (or into a folder inside it) is refused, --overwrite or not.
 TEST(HostileInputs, AugmentIntoItsInputIsRefused) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   const auto before = fs::last_write_time(seq / "rgb" / "1.000000.png");
   expectError(runFlowfusion("augment " + q(seq) + " " + q(seq) + " --overwrite"), "is the input sequence");
   expectError(runFlowfusion("augment " + q(seq) + " " + q(seq / "aug")), "lies inside the input sequence");
@@ -142,7 +115,7 @@ TEST(HostileInputs, OverwriteLeavesNoStaleFilesAndKeepsTheUsers) {
 // Case 2 for run: the sequence's ground-truth masks are never replaced by estimates.
 TEST(HostileInputs, RunIntoItsInputIsRefused) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   fs::create_directories(seq / "masks");
   cv::imwrite((seq / "masks" / "1.000000.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255)));
   const auto before = fs::last_write_time(seq / "masks" / "1.000000.png");
@@ -168,7 +141,7 @@ TEST(HostileInputs, RunOverwriteRemovesOnlyItsOwnEarlierFiles) {
   EXPECT_TRUE(fs::exists(out / "my_notes.txt"));
   expectNoEmptyOrTemporaryFiles(out);
   // A run may not overwrite a synthetic sequence (another command's output) with --overwrite.
-  const fs::path other = makeSequence(tmp.path() / "other");
+  const fs::path other = makeTinySequence(tmp.path() / "other");
   expectError(runFlowfusion("run " + q(other) + " --quiet --overwrite --out " + q(seq)),
               "holds the output of 'flowfusion synth'");
   EXPECT_EQ(filesIn(seq / "rgb"), 6u);
@@ -177,7 +150,7 @@ TEST(HostileInputs, RunOverwriteRemovesOnlyItsOwnEarlierFiles) {
 // Case 11: an empty output folder name.
 TEST(HostileInputs, EmptyOutputNameIsRefused) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   expectError(runFlowfusion("run " + q(seq) + " --out ''"), "output folder name is empty");
   expectError(runFlowfusion("synth '' --frames 2"), "output folder name is empty");
 }
@@ -185,7 +158,7 @@ TEST(HostileInputs, EmptyOutputNameIsRefused) {
 // Case 6.
 TEST(HostileInputs, SupervoxelResolutionThatAbortsPclIsRefused) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   const auto r = runFlowfusion("run " + q(seq) + " --out " + q(tmp.path() / "out") +
                                " --set clustering.backend=supervoxel --set clustering.voxel_resolution=1e-9");
   expectError(r, "voxel_resolution must be 0.001 to 1 metre, got 1e-09");
@@ -195,7 +168,7 @@ TEST(HostileInputs, SupervoxelResolutionThatAbortsPclIsRefused) {
 // Case 7: integers that wrapped, values without a range, unbounded synth.
 TEST(HostileInputs, NumbersThatWrapOrExceedTheirRangeAreRefused) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   const std::string run = "run " + q(seq) + " --out " + q(tmp.path() / "out") + " ";
   expectError(runFlowfusion(run + "--set odometry.levels=4294967300"), "'odometry.levels': 4294967300 is out of range");
   expectError(runFlowfusion(run + "--set odometry.max_iterations=4294967297"), "'odometry.max_iterations'");
@@ -223,7 +196,7 @@ TEST(HostileInputs, RpeDeltaLongerThanTheTrajectoryIsRefused) {
 // Case 8: user errors that were internal errors.
 TEST(HostileInputs, ConfigFolderHugePngAndHugePlyAreInputErrors) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   expectError(runFlowfusion("run " + q(seq) + " --out " + q(tmp.path() / "out") + " --config " + q(tmp.path())),
               tmp.str() + ": is a folder");
 
@@ -246,7 +219,7 @@ TEST(HostileInputs, ConfigFolderHugePngAndHugePlyAreInputErrors) {
 // Case 11: huge timestamps, garbage lines, a folder for groundtruth.txt.
 TEST(HostileInputs, HugeTimestampsGarbageLinesAndFoldersAreNamed) {
   testing::TempDir tmp;
-  const fs::path seq = makeSequence(tmp.path() / "seq");
+  const fs::path seq = makeTinySequence(tmp.path() / "seq");
   const std::string run = "run " + q(seq) + " --out " + q(tmp.path() / "out");
   fs::create_directories(seq / "groundtruth.txt");
   expectError(runFlowfusion(run), "groundtruth.txt: is a folder, not a trajectory file");

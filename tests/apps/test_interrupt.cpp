@@ -3,8 +3,6 @@
 // summary.json, and a one-frame run succeeds and says why it wrote no mesh.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -17,16 +15,6 @@ namespace ff {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Output and exit status of a bash script.
-testing::CommandResult bash(const std::string& script) {
-  testing::CommandResult r;
-  FILE* pipe = popen(("bash -c '" + script + "' 2>&1").c_str(), "r");
-  char buf[4096];
-  while (size_t n = std::fread(buf, 1, sizeof buf, pipe)) r.output.append(buf, n);
-  r.status = WEXITSTATUS(pclose(pipe));
-  return r;
-}
 
 class StoppedRuns : public ::testing::Test {
  protected:
@@ -45,7 +33,7 @@ void stopsWith(const std::string& signal, int expected_status, const std::string
                              " & pid=$!; for i in $(seq 600); do n=$(ls " + out +
                              "/masks 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.05; done; kill -" +
                              signal + " $pid; wait $pid";
-  const auto r = bash(script);
+  const auto r = testing::runShell(script);
   EXPECT_EQ(r.status, expected_status) << r.output;
   EXPECT_NE(r.output.find("run stopped after"), std::string::npos) << r.output;
   const nlohmann::json summary = readJsonFile(out + "/summary.json");

@@ -15,15 +15,6 @@ namespace fs = std::filesystem;
 namespace ff {
 namespace {
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no InputError";
-}
-
 TEST(OutputFolder, OverwriteRemovesExactlyTheListedFiles) {
   testing::TempDir tmp;
   const fs::path out = tmp.path() / "out";
@@ -39,7 +30,7 @@ TEST(OutputFolder, OverwriteRemovesExactlyTheListedFiles) {
   std::ofstream(out / kManifestName, std::ios::app) << "../outside.txt\n"
                                                     << (tmp.path() / "outside.txt").string() << "\n";
 
-  EXPECT_NE(errorOf([&] { prepareOutputDir(out.string(), false); }).find("--overwrite"), std::string::npos);
+  EXPECT_NE(testing::inputErrorOf([&] { prepareOutputDir(out.string(), false); }).find("--overwrite"), std::string::npos);
   prepareOutputDir(out.string(), true);
   EXPECT_FALSE(fs::exists(out / "trajectory.txt"));
   EXPECT_FALSE(fs::exists(out / "masks" / "1.000000.png"));
@@ -61,7 +52,7 @@ TEST(OutputFolder, OverwriteReplacesOnlyTheSameCommandsOutput) {
   prepareOutputDir(tmp.str(), false);
   writeFileAtomic((tmp.path() / "rgb.txt").string(), "ours");
   setOutputCommand("run");
-  const std::string msg = errorOf([&] { prepareOutputDir(tmp.str(), true); });
+  const std::string msg = testing::inputErrorOf([&] { prepareOutputDir(tmp.str(), true); });
   EXPECT_NE(msg.find("holds the output of 'flowfusion synth'"), std::string::npos) << msg;
   EXPECT_TRUE(fs::exists(tmp.path() / "rgb.txt"));
   setOutputCommand("synth");
@@ -75,7 +66,7 @@ TEST(OutputFolder, WithoutManifestOverwriteKeepsEverything) {
   std::ofstream(tmp.path() / "a.txt") << "x";
   prepareOutputDir(tmp.str(), true);
   EXPECT_TRUE(fs::exists(tmp.path() / "a.txt"));
-  EXPECT_NE(errorOf([] { prepareOutputDir("", true); }).find("output folder name is empty"), std::string::npos);
+  EXPECT_NE(testing::inputErrorOf([] { prepareOutputDir("", true); }).find("output folder name is empty"), std::string::npos);
 }
 
 TEST(OutputFolder, OverlapWithAnInputIsRefused) {
@@ -83,18 +74,18 @@ TEST(OutputFolder, OverlapWithAnInputIsRefused) {
   const fs::path seq = tmp.path() / "seq";
   fs::create_directories(seq / "rgb");
   const std::string what = "the input sequence";
-  EXPECT_NE(errorOf([&] { refuseOverlap(seq.string(), seq.string(), what); }).find(" is the input sequence"),
+  EXPECT_NE(testing::inputErrorOf([&] { refuseOverlap(seq.string(), seq.string(), what); }).find(" is the input sequence"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { refuseOverlap((seq / "." / "rgb" / "..").string(), seq.string(), what); })
+  EXPECT_NE(testing::inputErrorOf([&] { refuseOverlap((seq / "." / "rgb" / "..").string(), seq.string(), what); })
                 .find(" is the input sequence"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { refuseOverlap(tmp.str(), seq.string(), what); }).find(" contains the input sequence"),
+  EXPECT_NE(testing::inputErrorOf([&] { refuseOverlap(tmp.str(), seq.string(), what); }).find(" contains the input sequence"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { refuseOverlap((seq / "out").string(), seq.string(), what); })
+  EXPECT_NE(testing::inputErrorOf([&] { refuseOverlap((seq / "out").string(), seq.string(), what); })
                 .find(" lies inside the input sequence"),
             std::string::npos);
   fs::create_directory_symlink(seq, tmp.path() / "link");
-  EXPECT_NE(errorOf([&] { refuseOverlap((tmp.path() / "link").string(), seq.string(), what); }).find(" is the"),
+  EXPECT_NE(testing::inputErrorOf([&] { refuseOverlap((tmp.path() / "link").string(), seq.string(), what); }).find(" is the"),
             std::string::npos);
   EXPECT_NO_THROW(refuseOverlap((tmp.path() / "seq2").string(), seq.string(), what));
   EXPECT_NO_THROW(refuseOverlap((tmp.path() / "out").string(), seq.string(), what));

@@ -14,21 +14,6 @@ namespace fs = std::filesystem;
 namespace ff {
 namespace {
 
-// A valid two-frame 64x48 sequence with camera.txt.
-std::string makeSequence(const fs::path& root) {
-  fs::create_directories(root / "rgb");
-  fs::create_directories(root / "depth");
-  std::ofstream rgb(root / "rgb.txt"), depth(root / "depth.txt");
-  for (const char* t : {"1.000000", "1.033333"}) {
-    cv::imwrite((root / "rgb" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160)));
-    cv::imwrite((root / "depth" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_16U, cv::Scalar(6000)));
-    rgb << t << " rgb/" << t << ".png\n";
-    depth << t << " depth/" << t << ".png\n";
-  }
-  std::ofstream(root / "camera.txt") << "50 50 31.5 23.5 64 48\n";
-  return root.string();
-}
-
 std::string shellArg(const fs::path& p) { return "'" + p.string() + "'"; }
 
 TEST(CliErrors, RunOnMissingFolder) {
@@ -42,7 +27,7 @@ TEST(CliErrors, RunOnMissingFolder) {
 
 TEST(CliErrors, RunIntoNonEmptyOutWithoutOverwrite) {
   testing::TempDir tmp;
-  const std::string seq = makeSequence(tmp.path() / "seq");
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const fs::path out = tmp.path() / "out";
   fs::create_directories(out);
   std::ofstream(out / "trajectory.txt") << "precious\n";
@@ -59,7 +44,7 @@ TEST(CliErrors, RunIntoNonEmptyOutWithoutOverwrite) {
 
 TEST(CliErrors, BadSettingValue) {
   testing::TempDir tmp;
-  const std::string seq = makeSequence(tmp.path() / "seq");
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
                                         " --set odometry.levels=0");
   EXPECT_EQ(r.status, 2) << r.output;
@@ -69,7 +54,7 @@ TEST(CliErrors, BadSettingValue) {
 
 TEST(CliErrors, UnknownSetting) {
   testing::TempDir tmp;
-  const std::string seq = makeSequence(tmp.path() / "seq");
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
                                         " --set nosuch.key=1");
   EXPECT_EQ(r.status, 2) << r.output;
@@ -79,7 +64,7 @@ TEST(CliErrors, UnknownSetting) {
 
 TEST(CliErrors, NoIntrinsics) {
   testing::TempDir tmp;
-  const std::string seq = makeSequence(tmp.path() / "plain");
+  const std::string seq = testing::makeTinySequence(tmp.path() / "plain");
   fs::remove(fs::path(seq) / "camera.txt");
   const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out"));
   EXPECT_EQ(r.status, 2) << r.output;

@@ -51,7 +51,9 @@ void expectPlantedFeetStill(const Body& body, double t_begin, double t_end) {
       }
       const SE3 T = body.partPose(foot, t);
       if (!in_stance) {
-        if (stances > 0) EXPECT_GT((T.translation() - stance.translation()).norm(), 0.1) << "the foot stepped";
+        if (stances > 0) {
+          EXPECT_GT((T.translation() - stance.translation()).norm(), 0.1) << "the foot stepped";
+        }
         stance = T;
         in_stance = true;
         ++stances;

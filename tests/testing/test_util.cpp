@@ -3,8 +3,12 @@
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <sys/wait.h>
+
+#include "flowfusion/core/error.h"
 
 namespace ff::testing {
 
@@ -32,16 +36,43 @@ std::string sharedDataMissing() {
          "skipping this real-data test";
 }
 
-CommandResult runFlowfusion(const std::string& args) {
-  const std::string cmd = std::string(FLOWFUSION_APP_PATH) + " " + args + " 2>&1";
+CommandResult runShell(const std::string& script) {
   CommandResult r;
-  FILE* pipe = popen(cmd.c_str(), "r");
+  FILE* pipe = popen(("{ " + script + "; } 2>&1").c_str(), "r");
   if (!pipe) return r;
   std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  while (size_t n = std::fread(buf.data(), 1, buf.size(), pipe)) r.output.append(buf.data(), n);
   const int st = pclose(pipe);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
   return r;
+}
+
+CommandResult runFlowfusion(const std::string& args, const std::string& shell_prefix) {
+  return runShell((shell_prefix.empty() ? "" : shell_prefix + "; ") + "exec " + FLOWFUSION_APP_PATH + " " + args);
+}
+
+std::filesystem::path makeTinySequence(const std::filesystem::path& root) {
+  namespace fs = std::filesystem;
+  fs::create_directories(root / "rgb");
+  fs::create_directories(root / "depth");
+  std::ofstream rgb(root / "rgb.txt"), depth(root / "depth.txt");
+  for (const char* t : {"1.000000", "1.033333"}) {
+    cv::imwrite((root / "rgb" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(40, 90, 160)));
+    cv::imwrite((root / "depth" / (std::string(t) + ".png")).string(), cv::Mat(48, 64, CV_16U, cv::Scalar(6000)));
+    rgb << t << " rgb/" << t << ".png\n";
+    depth << t << " depth/" << t << ".png\n";
+  }
+  std::ofstream(root / "camera.txt") << "50 50 31.5 23.5 64 48\n";
+  return root;
+}
+
+std::string inputErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no InputError";
 }
 
 }  // namespace ff::testing

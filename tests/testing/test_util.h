@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -27,12 +28,21 @@ class TempDir {
 std::optional<std::string> sharedFr1Xyz();
 std::string sharedDataMissing();
 
-// Runs the flowfusion executable with `args`; returns its exit status and combined output.
+// Exit status (128 + signal when killed) and combined output of a command.
 struct CommandResult {
   int status = -1;
   std::string output;
 };
-CommandResult runFlowfusion(const std::string& args);
+// `script` run by sh, its standard output and error together.
+CommandResult runShell(const std::string& script);
+// The flowfusion executable with `args`, after `shell_prefix` (e.g. "ulimit -f 16") when given.
+CommandResult runFlowfusion(const std::string& args, const std::string& shell_prefix = "");
+
+// A valid two-frame 64x48 TUM-layout sequence with camera.txt under `root`; returns root.
+std::filesystem::path makeTinySequence(const std::filesystem::path& root);
+
+// The message of the InputError `f` throws, or "no InputError".
+std::string inputErrorOf(const std::function<void()>& f);
 
 }  // namespace ff::testing
 

@@ -70,21 +70,8 @@ void FilesSink::end(RunSummary& summary, const FlowFusionSystem& system) {
 }
 
 void FilesSink::writeSummary(RunSummary& summary) const {
-  nlohmann::json j;
-  j["complete"] = summary.complete;
-  if (!summary.complete) j["stop_reason"] = summary.stop_reason;
+  nlohmann::json j = toJson(summary);
   j["sequence"] = source_name_;
-  j["frames"] = summary.frames;
-  j["tracking_failures"] = summary.tracking_failures;
-  j["flow_restarts"] = summary.flow_restarts;
-  j["mean_rounds"] = summary.mean_rounds;
-  j["map_surfels"] = summary.map_surfels;
-  j["map_budget_reached"] = summary.map_budget_reached;
-  j["peak_memory_mib"] = summary.peak_memory_mib;
-  j["load_ms_median"] = summary.load_ms_median;
-  j["export_ms"] = summary.export_ms;
-  j["timings"] = summary.timings.toJson()["stages"];
-  j["notes"] = summary.notes;
   const std::string path = (fs::path(options_.out_dir) / "summary.json").string();
   writeJsonFile(path, j);
   summary.written.push_back(path);

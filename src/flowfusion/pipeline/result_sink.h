@@ -39,6 +39,10 @@ struct RunSummary {
   std::vector<std::string> notes;    // what a user should know (e.g. why no mesh was written)
 };
 
+// The summary's figures as summary.json holds them (complete, stop_reason when not, frames, failures,
+// restarts, rounds, map, memory, load and export times, per-stage timings, notes).
+nlohmann::json toJson(const RunSummary& summary);
+
 class ResultSink {
  public:
   virtual ~ResultSink() = default;

@@ -13,6 +13,24 @@ SE3 initialPose(const FrameSource& source, double timestamp) {
   return SE3::Identity();
 }
 
+nlohmann::json toJson(const RunSummary& summary) {
+  nlohmann::json j;
+  j["complete"] = summary.complete;
+  if (!summary.complete) j["stop_reason"] = summary.stop_reason;
+  j["frames"] = summary.frames;
+  j["tracking_failures"] = summary.tracking_failures;
+  j["flow_restarts"] = summary.flow_restarts;
+  j["mean_rounds"] = summary.mean_rounds;
+  j["map_surfels"] = summary.map_surfels;
+  j["map_budget_reached"] = summary.map_budget_reached;
+  j["peak_memory_mib"] = summary.peak_memory_mib;
+  j["load_ms_median"] = summary.load_ms_median;
+  j["export_ms"] = summary.export_ms;
+  j["timings"] = summary.timings.toJson()["stages"];
+  j["notes"] = summary.notes;
+  return j;
+}
+
 namespace {
 
 // Reads the next frame and records how long that took.
