@@ -173,6 +173,17 @@ void furnishWall(SceneModel& m, Rng& rng, const WallFrame& f, double s_begin, do
   }
 }
 
+// Scales the rotation's time so that its RMS angular speed is `deg_per_s`.
+void scaleAngularSpeed(CameraPath& cam, double deg_per_s) {
+  const double w2 = cam.yaw.rmsDerivative() * cam.yaw.rmsDerivative() +
+                    cam.pitch.rmsDerivative() * cam.pitch.rmsDerivative() +
+                    cam.roll.rmsDerivative() * cam.roll.rmsDerivative();
+  const double k_r = deg_per_s * kDeg / std::sqrt(w2);
+  cam.yaw.scaleTime(k_r);
+  cam.pitch.scaleTime(k_r);
+  cam.roll.scaleTime(k_r);
+}
+
 // The room, its furniture, the light and the camera path: everything of the static twin.
 CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
   Room room;
@@ -219,13 +230,7 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
   for (const auto& p : cam.position) v2 += p.rmsDerivative() * p.rmsDerivative();
   const double k_t = cfg.camera_speed / std::sqrt(v2);
   for (auto& p : cam.position) p.scaleTime(k_t);
-  const double w2 = cam.yaw.rmsDerivative() * cam.yaw.rmsDerivative() +
-                    cam.pitch.rmsDerivative() * cam.pitch.rmsDerivative() +
-                    cam.roll.rmsDerivative() * cam.roll.rmsDerivative();
-  const double k_r = cfg.camera_angular_speed * kDeg / std::sqrt(w2);
-  cam.yaw.scaleTime(k_r);
-  cam.pitch.scaleTime(k_r);
-  cam.roll.scaleTime(k_r);
+  scaleAngularSpeed(cam, cfg.camera_angular_speed);
 
   // Free-standing furniture between the camera and the objects' paths, near the initial view
   // direction, so that objects are also occluded.
@@ -297,13 +302,7 @@ void makeRpy(CameraPath& cam, const SynthConfig& cfg) {
   cam.yaw = randomSinusoids(rng, {{18 * kDeg, 0.3}, {6 * kDeg, 0.7}});
   cam.pitch = randomSinusoids(rng, {{14 * kDeg, 0.35}, {5 * kDeg, 0.8}});
   cam.roll = randomSinusoids(rng, {{14 * kDeg, 0.4}, {5 * kDeg, 0.9}});
-  const double w2 = cam.yaw.rmsDerivative() * cam.yaw.rmsDerivative() +
-                    cam.pitch.rmsDerivative() * cam.pitch.rmsDerivative() +
-                    cam.roll.rmsDerivative() * cam.roll.rmsDerivative();
-  const double k_r = cfg.camera_angular_speed * kDeg / std::sqrt(w2);
-  cam.yaw.scaleTime(k_r);
-  cam.pitch.scaleTime(k_r);
-  cam.roll.scaleTime(k_r);
+  scaleAngularSpeed(cam, cfg.camera_angular_speed);
 }
 
 // The first camera's view as seen on the floor: where people walk, seats and pushed objects stand.
