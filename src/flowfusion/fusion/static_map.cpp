@@ -187,7 +187,12 @@ void validate(const FusionConfig& c) {
                "positive with mesh_truncation_m > mesh_voxel_m");
 }
 
-StaticMap::StaticMap(const FusionConfig& config) : config_(config) { validate(config_); }
+StaticMap::StaticMap(const FusionConfig& config) : config_(config) {
+  validate(config_);
+  // The whole budget's address space at once: pages are touched only as surfels are added, and
+  // the storage never grows by copying (a doubling held both copies at its peak).
+  surfels_.reserve(static_cast<size_t>(config_.max_surfels));
+}
 
 void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                           const cv::Mat& static_weight) {
