@@ -45,8 +45,7 @@ void StaticMap::exportPointCloud(const std::string& path) const {
 void StaticMap::exportMesh(const std::string& path) const {
   // The stable surfels' own planes through a sparse TSDF (surfel_mesh.h): the mesh holds exactly
   // the static surfaces of the map, closed between surfels, without rendering any view.
-  const auto stable = [this](const Surfel& s) { return s.confidence >= config_.stable_confidence; };
-  if (std::none_of(surfels_.begin(), surfels_.end(), stable))
+  if (!hasStableSurfels())
     throw InputError("cannot write mesh '" + path + "': the map holds no stable surfels");
   const SurfelMesh mesh = meshSurfels(surfels_, config_.stable_confidence, config_.mesh_voxel_m, config_.mesh_truncation_m);
   if (mesh.triangles.empty()) throw InputError("cannot write mesh '" + path + "': the map gave no triangles");

@@ -581,6 +581,11 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
   return depth;
 }
 
+bool StaticMap::hasStableSurfels() const {
+  return std::any_of(surfels_.begin(), surfels_.end(),
+                     [&](const Surfel& s) { return s.confidence >= config_.stable_confidence; });
+}
+
 MapPoints StaticMap::points() const {
   MapPoints out;
   for (const Surfel& s : surfels_) {

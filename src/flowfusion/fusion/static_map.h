@@ -152,6 +152,8 @@ class StaticMap {
 
   // Stable surfels only (what the exports hold).
   MapPoints points() const;
+  // Whether any surfel is stable (what the exports need), without copying them.
+  bool hasStableSurfels() const;
 
   // Coloured point cloud with normals (binary PLY). Throws InputError if the file cannot be written.
   void exportPointCloud(const std::string& path) const;

@@ -43,7 +43,7 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
     summary.notes.push_back("no map written: the run did not complete");
     return;
   }
-  if (map.points().positions.empty()) {
+  if (!map.hasStableSurfels()) {
     summary.notes.push_back("no map written: the map holds no stable surfels (too few frames or no valid depth)");
     return;
   }

@@ -75,7 +75,7 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
   if (segmentation_ && opt.carry_scores && !prev.scores.empty())
     carried = carryScores(prev.scores, prev.depthAt(opt.segmentation_level),
                           camera_.atLevel(opt.segmentation_level), T_prev_cur_guess.inverse(), 0.f);
-  MotionEstimate estimate = firstOdometry(cur, target, T_target_prev, carried, result);
+  MotionEstimate estimate = firstOdometry(cur, target, T_target_prev, T_prev_cur_guess, carried, result);
   if (segmentation_) {
     segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, estimate, timings_);
     result.restarted_from_flow = estimate.restarted_from_flow;
@@ -94,8 +94,8 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
 }
 
 MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,
-                                               const cv::Mat& carried, FrameResult& result) {
-  const SE3 T_prev_cur_guess = config_.pipeline.constant_velocity ? T_prev_cur_velocity_ : SE3::Identity();
+                                               const SE3& T_prev_cur_guess, const cv::Mat& carried,
+                                               FrameResult& result) {
   StageTimer timer(timings_, "odometry");
   const cv::Mat weights = staticWeights(carried);
   MotionEstimate e;

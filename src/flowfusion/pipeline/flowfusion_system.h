@@ -49,10 +49,10 @@ class FlowFusionSystem {
 
  private:
   OdometryFrame prepare(const RgbdFrame& frame);
-  // The odometry against the chosen target from the constant-velocity guess, weighted by the
+  // The odometry against the chosen target from the guess T_prev_cur_guess, weighted by the
   // carried scores; a rendered target that fails gives way to the previous frame.
   MotionEstimate firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,
-                               const cv::Mat& carried, FrameResult& result);
+                               const SE3& T_prev_cur_guess, const cv::Mat& carried, FrameResult& result);
   // Odometry and segmentation against the target; returns the scores (empty without segmentation).
   cv::Mat track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
   void fuse(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores);

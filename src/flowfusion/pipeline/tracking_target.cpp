@@ -57,7 +57,6 @@ void TrackingTargets::advance(TrackedFrame frame, bool tracking_ok, const cv::Ma
                               const StaticMap* map, Timings& timings) {
   if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok)) {
     keyframe_ = std::make_unique<TrackedFrame>(frame);
-    keyframe_->from_model = false;
     if (options_.model_keyframes && map && map->size() > 0) {
       StageTimer timer(timings, "prediction");
       // The map has no moving objects; the keyframe's image has, so their pixels keep its depth.
