@@ -77,7 +77,12 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
                           camera_.atLevel(opt.segmentation_level), T_prev_cur_guess.inverse(), 0.f);
   MotionEstimate estimate = firstOdometry(cur, target, T_target_prev, T_prev_cur_guess, carried, result);
   if (segmentation_) {
-    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, estimate, timings_);
+    FlowField flow;
+    {
+      StageTimer timer(timings_, "flow");
+      flow = segmentation_->computeFlow(frame, prev.frame);
+    }
+    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, flow, estimate, timings_);
     result.restarted_from_flow = estimate.restarted_from_flow;
     result.iterations = estimate.rounds;
     flow_restarts_ += estimate.restarted_from_flow;

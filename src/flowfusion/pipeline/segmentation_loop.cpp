@@ -40,12 +40,12 @@ cv::Mat SegmentationLoop::flowResidualAt(const FlowField& flow, const OdometryFr
   return flowResidual(flow, egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur)) * std::ldexp(1.0, level);
 }
 
-void SegmentationLoop::run(const SegmentationInput& in, MotionEstimate& estimate, Timings& timings) {
-  FlowField flow;
-  {
-    StageTimer timer(timings, "flow");
-    flow = flow_->compute(in.frame.intensity, in.previous.frame.intensity);
-  }
+FlowField SegmentationLoop::computeFlow(const RgbdFrame& cur, const RgbdFrame& previous) {
+  return flow_->compute(cur.intensity, previous.intensity);
+}
+
+void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
+                           Timings& timings) {
   if (config_.consensus.enabled) restartFromFlow(in, flow, estimate, timings);
   if (estimate.odometry.ok) scoreRounds(in, flow, estimate, timings);
 }

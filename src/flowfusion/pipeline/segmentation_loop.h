@@ -39,8 +39,12 @@ struct SegmentationInput {
 class SegmentationLoop {
  public:
   SegmentationLoop(const SystemConfig& config, const CameraIntrinsics& camera);
-  // Refines `estimate`, which holds the first odometry and the carried scores.
-  void run(const SegmentationInput& in, MotionEstimate& estimate, Timings& timings);
+  // Dense flow from the current image to the previous one (independent of the odometry, so it can
+  // run while the first odometry does).
+  FlowField computeFlow(const RgbdFrame& cur, const RgbdFrame& previous);
+  // Refines `estimate`, which holds the first odometry and the carried scores, with `flow` from
+  // computeFlow.
+  void run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
 
  private:
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image.
