@@ -290,5 +290,43 @@ TEST(DynamicScores, WeakMotionDoesNotKeepTheModelTerm) {
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }
 
+TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameDepth) {
+  // A walker without a map behind him (no model term): a swinging shin (cluster 1, 2 m, large flow
+  // residual), the stance shin beside it (cluster 2, 2.05 m, still), the wall (cluster 0, 4 m),
+  // all three adjacent.
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 6) << 0, 0, 1, 1, 2, 2);
+  g.num_clusters = 3;
+  g.sizes = {2, 2, 2};
+  g.mean_depth = {4.0f, 2.0f, 2.05f};
+  g.centroids.resize(3);
+  g.edges = {{0, 1}, {0, 2}, {1, 2}};
+  ResidualImages r;
+  r.r_F = (cv::Mat_<float>(1, 6) << 0.f, 0.f, 100.f, 100.f, 0.f, 0.f);
+  ScoreConfig cfg;
+  const DynamicScores body = computeDynamicScores(g, r, cfg);
+  EXPECT_GT(body.b[1], 0.8f);
+  EXPECT_GT(body.b[2], 0.5f);  // the stance shin follows the moving one
+  EXPECT_LT(body.b[0], 0.5f);  // the wall does not
+  cfg.body_smoothing = 1;      // the paper's uniform smoothing
+  const DynamicScores paper = computeDynamicScores(g, r, cfg);
+  EXPECT_LT(paper.b[2], 0.5f);
+  EXPECT_LT(paper.b[2], body.b[2]);
+  cfg.body_smoothing = 2;
+  cfg.body_depth_ratio = 0.01;  // 5 cm at 2 m is then a different surface
+  EXPECT_NEAR(computeDynamicScores(g, r, cfg).b[2], paper.b[2], 1e-6);
+  // In the solver an edge scaled by 2 is that edge counted twice.
+  const std::vector<double> delta = {0.0, 2.2, 0.0};
+  const Eigen::VectorXd scaled = solveScoreEnergy(delta, {{0, 1}, {1, 2}}, 0.1, 0.3, 1.0, {}, 0.0, {1.0, 2.0});
+  const Eigen::VectorXd twice = solveScoreEnergy(delta, {{0, 1}, {1, 2}, {1, 2}}, 0.1, 0.3, 1.0);
+  EXPECT_LT((scaled - twice).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_THROW(solveScoreEnergy(delta, {{0, 1}}, 0.1, 0.3, 1.0, {}, 0.0, {-1.0}), InputError);
+  cfg.body_smoothing = -1;
+  EXPECT_THROW(validate(cfg), InputError);
+  cfg.body_smoothing = 2;
+  cfg.body_depth_ratio = 1;
+  EXPECT_THROW(validate(cfg), InputError);
+}
+
 }  // namespace
 }  // namespace ff

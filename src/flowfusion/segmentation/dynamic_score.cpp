@@ -45,6 +45,37 @@ cv::Mat compareToModel(const cv::Mat& depth, const cv::Mat& model_depth, const c
   return out;
 }
 
+// Union-find over the adjacency graph joining clusters that both score b > 0.5: each cluster's
+// group root (a cluster with b <= 0.5 is its own root).
+std::vector<int> dynamicGroups(const std::vector<std::pair<int, int>>& edges, const Eigen::VectorXd& b) {
+  std::vector<int> parent(b.size());
+  for (size_t c = 0; c < parent.size(); ++c) parent[c] = static_cast<int>(c);
+  const auto find = [&](int c) {
+    while (parent[c] != c) c = parent[c] = parent[parent[c]];
+    return c;
+  };
+  for (const auto& [i, j] : edges)
+    if (b[i] > 0.5 && b[j] > 0.5) parent[find(i)] = find(j);
+  for (size_t c = 0; c < parent.size(); ++c) parent[c] = find(static_cast<int>(c));
+  return parent;
+}
+
+// lambda_G's factor per edge of the graph: body_smoothing where the two clusters' mean depths
+// differ by at most body_depth_ratio of the nearer (parts of one body), 1 elsewhere; empty when
+// body_smoothing is 1.
+std::vector<double> bodyEdgeScales(const ClusterGraph& graph, const ScoreConfig& config) {
+  if (config.body_smoothing == 1.0) return {};
+  std::vector<double> scale(graph.edges.size(), 1.0);
+  for (size_t e = 0; e < graph.edges.size(); ++e) {
+    const auto [i, j] = graph.edges[e];
+    if (i < 0 || j < 0 || i >= graph.num_clusters || j >= graph.num_clusters) continue;  // the solver rejects it
+    const double Di = graph.mean_depth[i], Dj = graph.mean_depth[j];
+    if (Di > 0 && Dj > 0 && std::abs(Di - Dj) <= config.body_depth_ratio * std::min(Di, Dj))
+      scale[e] = config.body_smoothing;
+  }
+  return scale;
+}
+
 }  // namespace
 
 double scoreTarget(double delta, double theta_b, double theta_t) {
@@ -58,10 +89,13 @@ double scoreWeight(double delta, double theta_b, double theta_t) {
 
 Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
                                  double theta_b, double theta_t, double lambda_G,
-                                 const std::vector<double>& prior, double lambda_T) {
+                                 const std::vector<double>& prior, double lambda_T,
+                                 const std::vector<double>& edge_scale) {
   checkThresholds(theta_b, theta_t);
   if (!(lambda_G >= 0) || !std::isfinite(lambda_G))
     throw InputError("scores: lambda_G must be a finite value >= 0, got " + std::to_string(lambda_G));
+  for (const double s : edge_scale)
+    if (!(s >= 0) || !std::isfinite(s)) throw InputError("scores: edge scales must be finite values >= 0");
   const int n = static_cast<int>(delta.size());
   if (n == 0) return {};
   std::vector<Eigen::Triplet<double>> triplets;
@@ -75,14 +109,16 @@ Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::ve
     triplets.emplace_back(i, i, w + (has_prior ? lambda_T : 0.0));
     rhs[i] = w * g + (has_prior ? lambda_T * prior[i] : 0.0);
   }
-  for (const auto& [i, j] : edges) {
+  for (size_t e = 0; e < edges.size(); ++e) {
+    const auto [i, j] = edges[e];
     if (i < 0 || j < 0 || i >= n || j >= n || i == j)
       throw InputError("scores: edge (" + std::to_string(i) + ", " + std::to_string(j) + ") is invalid for " +
                        std::to_string(n) + " clusters");
-    triplets.emplace_back(i, i, lambda_G);
-    triplets.emplace_back(j, j, lambda_G);
-    triplets.emplace_back(i, j, -lambda_G);
-    triplets.emplace_back(j, i, -lambda_G);
+    const double l = e < edge_scale.size() ? lambda_G * edge_scale[e] : lambda_G;
+    triplets.emplace_back(i, i, l);
+    triplets.emplace_back(j, j, l);
+    triplets.emplace_back(i, j, -l);
+    triplets.emplace_back(j, i, -l);
   }
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(triplets.begin(), triplets.end());
@@ -110,6 +146,11 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.agreement_intensity must be in (0, 1] (1 compares depth alone)");
   if (!(c.temporal_prior >= 0 && std::isfinite(c.temporal_prior)))
     throw InputError("scores.temporal_prior must be a finite value >= 0 (0 turns the prior off)");
+  if (!(c.body_smoothing >= 0 && std::isfinite(c.body_smoothing)))
+    throw InputError("scores.body_smoothing must be a finite value >= 0 (1 = the paper's uniform lambda_G)");
+  if (!(c.body_depth_ratio >= 0 && c.body_depth_ratio < 1)) throw InputError("scores.body_depth_ratio must be in [0, 1)");
+  if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
+    throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
 }
 
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
@@ -123,20 +164,22 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.r_M, labels, "r_M");
   checkResidual(residuals.a_M, labels, "a_M");
   checkResidual(residuals.prior, labels, "prior");
+  checkResidual(residuals.memory, labels, "memory");
   const int n = graph.num_clusters;
   if (static_cast<int>(graph.mean_depth.size()) != n)
     throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
                      std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
-  constexpr int K = 6;
+  constexpr int K = 7;
   constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
   constexpr int kAgreement = 4;  // index of a_M: scales the motion terms
   constexpr int kPrior = 5;      // index of the carried scores: the temporal prior
+  constexpr int kMemory = 6;     // index of the motion memory: evidence for the model term
   std::vector<double> sum(K * n, 0.0);
   std::vector<int> cnt(K * n, 0);
-  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F, &residuals.r_M, &residuals.a_M,
-                              &residuals.prior};
+  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F,   &residuals.r_M,
+                              &residuals.a_M, &residuals.prior, &residuals.memory};
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
     for (int k = 0; k < K; ++k) {
@@ -151,6 +194,9 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
       }
     }
   }
+  const auto mean = [&](int c, int k) {
+    return cnt[K * c + k] > 0 ? sum[K * c + k] / cnt[K * c + k] : std::numeric_limits<double>::quiet_NaN();
+  };
   // Eq. 10 from the motion terms (r_I, r_D, r_F) and the model term separately.
   std::vector<double> delta(n), model(n, 0.0);
   for (int c = 0; c < n; ++c) {
@@ -161,40 +207,34 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
     bool any = false;
     for (int k = 0; k <= kModelTerm; ++k) {
       if (cnt[K * c + k] == 0) continue;
-      const double term = scale[k] * sum[K * c + k] / cnt[K * c + k];
-      (k == kModelTerm ? model[c] : d) += term;
+      (k == kModelTerm ? model[c] : d) += scale[k] * mean(c, k);
       any = true;
     }
-    if (cnt[K * c + kAgreement] > 0)
-      d *= std::max(0.0, 1.0 - config.model_agreement * sum[K * c + kAgreement] / cnt[K * c + kAgreement]);
+    if (cnt[K * c + kAgreement] > 0) d *= std::max(0.0, 1.0 - config.model_agreement * mean(c, kAgreement));
     delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
   }
-  std::vector<double> prior(n, std::numeric_limits<double>::quiet_NaN());
-  for (int c = 0; c < n; ++c)
-    if (cnt[K * c + kPrior] > 0) prior[c] = sum[K * c + kPrior] / cnt[K * c + kPrior];
+  std::vector<double> prior(n);
+  for (int c = 0; c < n; ++c) prior[c] = mean(c, kPrior);
   std::vector<double> full(n);
   for (int c = 0; c < n; ++c) full[c] = std::isnan(delta[c]) ? delta[c] : delta[c] + model[c];
+  const std::vector<double> edge_scale = bodyEdgeScales(graph, config);
   const auto solve = [&] {
     return solveScoreEnergy(full, graph.edges, config.theta_b, config.theta_t, config.lambda_G, prior,
-                            config.temporal_prior);
+                            config.temporal_prior, edge_scale);
   };
   Eigen::VectorXd b = solve();
+  // Connected groups of dynamic clusters; which of them move now, which moved recently.
+  const std::vector<int> root = dynamicGroups(graph.edges, b);
+  std::vector<char> moves(n, 0), remembered(n, 0);
+  for (int c = 0; c < n; ++c) {
+    if (b[c] <= 0.5) continue;
+    if (delta[c] > config.model_motion_delta) moves[root[c]] = 1;
+    if (mean(c, kMemory) >= 0.5) remembered[root[c]] = 1;
+  }
   if (config.model_needs_motion && !residuals.r_M.empty()) {
-    // Connected groups of dynamic clusters (union-find over the adjacency graph).
-    std::vector<int> parent(n);
-    for (int c = 0; c < n; ++c) parent[c] = c;
-    auto root = [&](int c) {
-      while (parent[c] != c) c = parent[c] = parent[parent[c]];
-      return c;
-    };
-    for (const auto& [i, j] : graph.edges)
-      if (b[i] > 0.5 && b[j] > 0.5) parent[root(i)] = root(j);
-    std::vector<char> moving(n, 0);
-    for (int c = 0; c < n; ++c)
-      if (b[c] > 0.5 && delta[c] > config.model_motion_delta) moving[root(c)] = 1;
     bool dropped = false;
     for (int c = 0; c < n; ++c)
-      if (b[c] > 0.5 && !moving[root(c)] && model[c] > 0) {
+      if (b[c] > 0.5 && !moves[root[c]] && !remembered[root[c]] && model[c] > 0) {
         full[c] = delta[c];
         dropped = true;
       }
@@ -203,6 +243,10 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   DynamicScores out;
   out.delta.assign(full.begin(), full.end());
   out.b.assign(b.data(), b.data() + b.size());
+  out.moving.resize(n);
+  // Motion worth remembering: the group moves now and the cluster was dynamic in the previous
+  // frame too (its carried score), so a static surface flagged in one frame is not remembered.
+  for (int c = 0; c < n; ++c) out.moving[c] = b[c] > 0.5 && moves[root[c]] && prior[c] > 0.5;
   return out;
 }
 

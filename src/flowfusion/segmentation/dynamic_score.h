@@ -22,6 +22,12 @@ struct ScoreConfig {
   double theta_t = 0.3;
   // Weight of the smoothness term E_G (Eq. 15); 1 = the paper (docs/tuning.md#lambda_g).
   double lambda_G = 1.0;
+  // Factor on lambda_G for the edges between clusters whose mean depths differ by at most
+  // body_depth_ratio of the nearer one (our extension; 1 = the paper): the parts of one body (a
+  // stance leg, a head beside a moving torso) follow each other more than a body follows the
+  // background it stands in front of (docs/tuning.md#body_smoothing).
+  double body_smoothing = 2.0;
+  double body_depth_ratio = 0.1;  // fraction of the depth
   // Weight of the static-model occlusion term added to Eq. 10 (our extension; 0 = the paper): how
   // far the cluster lies in front of the static map, metres over D_i (docs/tuning.md#alpha_m).
   // It flags a whole object in front of the mapped background, not only its moving edges.
@@ -45,10 +51,17 @@ struct ScoreConfig {
   // lambda_T (our extension; 0 = the paper): lambda_T sum_i (b_i - p_i)^2 is added to E(b), p_i the
   // previous scores carried along the motion (docs/tuning.md#temporal_prior).
   double temporal_prior = 0.5;
+  // Seconds (our extension; 0 = off): a region that belonged to a moving group of clusters within
+  // this time counts as moving for model_needs_motion, so a person who stops (stands, sits) in
+  // front of the mapped background stays dynamic while they cover it. Only motion in two frames in
+  // a row is remembered, so a static surface flagged once is not, one flagged longer is released
+  // after this time (MotionMemory, docs/tuning.md#model_memory_s).
+  double model_memory_s = 2.0;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G, alpha_M,
-                                                model_margin, model_needs_motion, model_motion_delta, model_agreement,
-                                                agreement_margin, agreement_intensity, temporal_prior)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
+                                                body_smoothing, body_depth_ratio, alpha_M, model_margin,
+                                                model_needs_motion, model_motion_delta, model_agreement,
+                                                agreement_margin, agreement_intensity, temporal_prior, model_memory_s)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
@@ -61,12 +74,16 @@ struct ResidualImages {
   cv::Mat r_M;  // occlusion of the static model, metres (modelOcclusion)
   cv::Mat a_M;  // agreement with the static model, 1 or 0 (modelAgreement)
   cv::Mat prior;  // previous scores carried into this frame, [0, 1] (ScoreConfig::temporal_prior)
+  cv::Mat memory;  // 1 where the pixel moved within model_memory_s, 0 where not (MotionMemory::recall)
 };
 
 struct DynamicScores {
   std::vector<float> delta;  // Eq. 10 per cluster (with the model term where it was kept); NaN where
                              // the cluster had no valid residual
   std::vector<float> b;      // dynamic score in [0, 1] per cluster
+  std::vector<char> moving;  // per cluster: b > 0.5 in a group with motion evidence of this frame
+                             // (delta above model_motion_delta; the memory does not count) and a
+                             // carried prior above 0.5 (dynamic in the previous frame too)
 };
 
 // g (Eq. 13) and w (Eq. 14).
@@ -77,20 +94,24 @@ double scoreWeight(double delta, double theta_b, double theta_t);
 //           (+ alpha_M mean(r_M) / D_i) over cluster i's pixels
 // (Eq. 10 normalised by size; each mean over the pixels where that residual is valid, so one
 // missing term does not drop the others), then b from solveScoreEnergy, with p_i the cluster's mean
-// of residuals.prior where it is given (ScoreConfig::temporal_prior). Throws InputError on
-// mismatched sizes/types or invalid thresholds.
+// of residuals.prior where it is given (ScoreConfig::temporal_prior), lambda_G scaled on the edges
+// within a body (ScoreConfig::body_smoothing). A group with a cluster whose residuals.memory
+// averages >= 0.5 keeps its model term as if it moved (ScoreConfig::model_memory_s). Throws
+// InputError on mismatched sizes/types or invalid thresholds.
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
                                    const ScoreConfig& config);
 
-// Minimises E(b) = sum_i w_i (b_i - g_i)^2 + lambda_G sum_{(i,j)} (b_i - b_j)^2 (Eqs. 11-15)
-// + lambda_T sum_i (b_i - p_i)^2 over the clusters with a finite prior p_i (none when `prior` is
-// empty or lambda_T = 0): (W + lambda_T P + lambda_G L) b = W g + lambda_T P p, L the graph
-// Laplacian, P selecting the clusters with a prior, solved with a sparse LDLT, then clamped to
-// [0, 1]. A NaN delta (no evidence) gets a near-zero data weight towards 0, so its neighbours
-// decide its score. Requires theta_t > theta_b, lambda_G >= 0 and edges within range.
+// Minimises E(b) = sum_i w_i (b_i - g_i)^2 + lambda_G sum_{(i,j)} s_ij (b_i - b_j)^2 (Eqs. 11-15;
+// s_ij the edge's edge_scale, 1 where not given) + lambda_T sum_i (b_i - p_i)^2 over the clusters
+// with a finite prior p_i (none when `prior` is empty or lambda_T = 0):
+// (W + lambda_T P + lambda_G L) b = W g + lambda_T P p, L the weighted graph Laplacian, P selecting
+// the clusters with a prior, solved with a sparse LDLT, then clamped to [0, 1]. A NaN delta (no
+// evidence) gets a near-zero data weight towards 0, so its neighbours decide its score. Requires
+// theta_t > theta_b, lambda_G >= 0, edge scales >= 0 and edges within range.
 Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::vector<std::pair<int, int>>& edges,
                                  double theta_b, double theta_t, double lambda_G,
-                                 const std::vector<double>& prior = {}, double lambda_T = 0.0);
+                                 const std::vector<double>& prior = {}, double lambda_T = 0.0,
+                                 const std::vector<double>& edge_scale = {});
 
 // r_M per pixel: max(0, model_depth - depth - margin * depth), metres, CV_32F; NaN where either
 // depth is missing. Both CV_32FC1 of one size (throws InputError otherwise).
