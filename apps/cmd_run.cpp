@@ -55,7 +55,7 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
   std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
               s.tracking_failures, s.flow_restarts);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
-  std::printf(" (mean total %.1f ms)\n", mean(s.timings.frameTotals()));
+  std::printf(" (frame %.1f ms wall, overlapping stages counted once)\n", s.frame_ms_median);
   if (source.groundtruth()) {
     try {
       const auto ate = eval::computeAte(*source.groundtruth(), s.trajectory);

@@ -88,6 +88,31 @@ TEST(RunSequence, AStopRequestEndsAfterTheCurrentFrame) {
   EXPECT_EQ(probe.calls.back(), "end incomplete");
 }
 
+// Keeps each frame's pose and mask.
+struct ResultsSink : ResultSink {
+  std::vector<FrameResult> results;
+  void frame(const RgbdFrame&, const FrameResult& r) override { results.push_back(r); }
+};
+
+TEST(RunSequence, ReadingAheadChangesNothing) {
+  SynthSource ahead_source(6), plain_source(6);
+  ResultsSink ahead, plain;
+  RunControl no_read_ahead;
+  no_read_ahead.prefetch_frames = 0;
+  const RunSummary a = runSequence(ahead_source, SystemConfig{}, {&ahead});
+  const RunSummary b = runSequence(plain_source, SystemConfig{}, {&plain}, no_read_ahead);
+  ASSERT_EQ(a.frames, 6u);
+  ASSERT_EQ(b.frames, 6u);
+  EXPECT_EQ(a.map_surfels, b.map_surfels);
+  for (size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(a.trajectory[i].timestamp, b.trajectory[i].timestamp);
+    EXPECT_TRUE(a.trajectory[i].T_world_cam.matrix() == b.trajectory[i].T_world_cam.matrix()) << "frame " << i;
+    EXPECT_EQ(cv::norm(ahead.results[i].dynamic_mask, plain.results[i].dynamic_mask, cv::NORM_INF), 0) << "frame " << i;
+  }
+  EXPECT_EQ(a.timings.samples("fusion").size(), 3u);  // every second frame, the last one's included
+  EXPECT_GT(a.frame_ms_median, 0);
+}
+
 TEST(FilesSink, WritesResultsAndRefusesANonEmptyFolder) {
   testing::TempDir tmp;
   synth::SynthConfig sc;

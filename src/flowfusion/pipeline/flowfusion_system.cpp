@@ -1,7 +1,9 @@
 #include "flowfusion/pipeline/flowfusion_system.h"
 
+#include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/segmentation/dynamic_score.h"
@@ -12,6 +14,11 @@ namespace ff {
 namespace {
 
 double depthTime(const RgbdFrame& f) { return std::isnan(f.depth_timestamp) ? f.timestamp : f.depth_timestamp; }
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 const SystemConfig& validated(const SystemConfig& config) {
   validate(config);
@@ -39,7 +46,23 @@ OdometryFrame FlowFusionSystem::prepare(const RgbdFrame& frame) {
   return prepareOdometryFrame(frame.intensity, frame.depth, camera_, config_.odometry);
 }
 
+const StaticMap* FlowFusionSystem::map() const {
+  finishFusion();
+  return map_.get();
+}
+
+Timings& FlowFusionSystem::timings() {
+  finishFusion();
+  return timings_;
+}
+
+const Timings& FlowFusionSystem::timings() const {
+  finishFusion();
+  return timings_;
+}
+
 FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
+  const Clock::time_point start = Clock::now();
   FrameResult result;
   result.timestamp = frame.timestamp;
   timings_.beginFrame(frame.timestamp);
@@ -57,17 +80,21 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, config_.pipeline.mask_threshold);
   result.scores = scores;
-  fuse(frame, result.T_world_cam, full_scores);
+  startFusion(frame, result.T_world_cam, full_scores);
+  // A new model keyframe is the map rendered at this frame's pose, this frame's fusion included.
+  if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok)) finishFusion();
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);
   trajectory_.push_back({frame.timestamp, atColourTime(frame, result.T_world_cam)});
+  frame_ms_.push_back(msSince(start));
   return result;
 }
 
 cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result) {
   const PipelineOptions& opt = config_.pipeline;
   const TrackedFrame& prev = *targets_.previous();
+  if (opt.tracking == TrackingMode::FrameToModel) finishFusion();  // choose() renders the map
   TrackingTarget target = targets_.choose(map_.get(), timings_);
   SE3 T_target_prev = target.T_world_target.inverse() * prev.T_world_cam;
   const SE3 T_prev_cur_guess = opt.constant_velocity ? T_prev_cur_velocity_ : SE3::Identity();
@@ -75,13 +102,19 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
   if (segmentation_ && opt.carry_scores && !prev.scores.empty())
     carried = carryScores(prev.scores, prev.depthAt(opt.segmentation_level),
                           camera_.atLevel(opt.segmentation_level), T_prev_cur_guess.inverse(), 0.f);
+  // The flow needs neither the odometry nor the map: it runs beside the first odometry.
+  std::future<std::pair<FlowField, double>> flow_task;
+  if (segmentation_)
+    flow_task = std::async(std::launch::async, [this, &frame, &prev] {
+      const Clock::time_point flow_start = Clock::now();
+      FlowField flow = segmentation_->computeFlow(frame, prev.frame);
+      return std::make_pair(std::move(flow), msSince(flow_start));
+    });
   MotionEstimate estimate = firstOdometry(cur, target, T_target_prev, T_prev_cur_guess, carried, result);
   if (segmentation_) {
-    FlowField flow;
-    {
-      StageTimer timer(timings_, "flow");
-      flow = segmentation_->computeFlow(frame, prev.frame);
-    }
+    auto [flow, flow_ms] = flow_task.get();
+    timings_.add("flow", flow_ms);
+    finishFusion();  // the loop reads the map
     segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, flow, estimate, timings_);
     result.restarted_from_flow = estimate.restarted_from_flow;
     result.iterations = estimate.rounds;
@@ -119,11 +152,19 @@ MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, Trackin
   return e;
 }
 
-void FlowFusionSystem::fuse(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores) {
+void FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores) {
   // trajectory_ holds one pose per frame processed before this one.
   if (!map_ || trajectory_.size() % static_cast<size_t>(config_.pipeline.fusion_every) != 0) return;
-  StageTimer timer(timings_, "fusion");
-  map_->integrate(frame, camera_, T_world_cam, staticWeights(full_scores));
+  finishFusion();
+  fusion_ = std::async(std::launch::async, [this, frame, T_world_cam, weights = staticWeights(full_scores)] {
+    const Clock::time_point start = Clock::now();
+    map_->integrate(frame, camera_, T_world_cam, weights);
+    return msSince(start);
+  });
+}
+
+void FlowFusionSystem::finishFusion() const {
+  if (fusion_.valid()) timings_.add("fusion", fusion_.get());
 }
 
 SE3 FlowFusionSystem::atColourTime(const RgbdFrame& frame, const SE3& T_world_cam) const {

@@ -2,8 +2,10 @@
 // The per-frame FlowFusion system (paper Fig. 1): robust odometry against a tracking target, the
 // segmentation loop (flow, clusters, dynamic scores, weighted odometry), fusion of the static
 // background into a surfel map. docs/design.md draws the pipeline and its frame conventions.
+#include <future>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
@@ -36,12 +38,20 @@ class FlowFusionSystem {
 
   // Processes the next frame (in time order) and returns its pose and mask. Stage times are added
   // to timings() under "odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion".
+  // Two stages run beside others on a second thread, the results the same as one after the other:
+  // the flow beside the first odometry, and the frame's fusion into the map beside the next
+  // frame's tracking until that reads the map (its time lands in the row of the frame that waited
+  // for it). The frame's images must stay unchanged until the next frame is processed.
   FrameResult process(const RgbdFrame& frame);
 
   const Trajectory& trajectory() const { return trajectory_; }
-  const StaticMap* map() const { return map_.get(); }
-  Timings& timings() { return timings_; }
-  const Timings& timings() const { return timings_; }
+  // The map up to the last processed frame (waits for that frame's fusion).
+  const StaticMap* map() const;
+  // Waits likewise, so the last fusion's time is in.
+  Timings& timings();
+  const Timings& timings() const;
+  // process()'s wall time per frame (ms): stages that run at the same time count once.
+  const std::vector<double>& frameMs() const { return frame_ms_; }
   const SystemConfig& config() const { return config_; }
   const CameraIntrinsics& camera() const { return camera_; }
   int trackingFailures() const { return failures_; }
@@ -55,7 +65,10 @@ class FlowFusionSystem {
                                const SE3& T_prev_cur_guess, const cv::Mat& carried, FrameResult& result);
   // Odometry and segmentation against the target; returns the scores (empty without segmentation).
   cv::Mat track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
-  void fuse(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores);
+  // Starts fusing the frame into the map on a worker thread (every fusion_every frames).
+  void startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores);
+  // Waits for the fusion started last, if one is running, and adds its time to timings_.
+  void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.
   SE3 atColourTime(const RgbdFrame& frame, const SE3& T_world_cam) const;
 
@@ -69,9 +82,13 @@ class FlowFusionSystem {
   SE3 T_prev_cur_velocity_ = SE3::Identity();  // last frame-to-frame motion, the next guess
   double velocity_dt_ = 0;                      // s, the time that motion took
   Trajectory trajectory_;
-  Timings timings_;
+  // Mutable: the const accessors wait for the background fusion and record its time.
+  mutable Timings timings_;
+  std::vector<double> frame_ms_;
   int failures_ = 0;
   int flow_restarts_ = 0;
+  // The fusion running on a worker (its duration in ms); last, so it ends before the map goes.
+  mutable std::future<double> fusion_;
 };
 
 }  // namespace ff

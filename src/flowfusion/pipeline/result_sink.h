@@ -29,7 +29,8 @@ struct RunSummary {
   int tracking_failures = 0;
   int flow_restarts = 0;      // frames whose odometry restarted from the flow's rigid consensus
   double mean_rounds = 0;     // segmentation <-> odometry rounds per frame (FrameResult::iterations)
-  double load_ms_median = 0;  // reading and decoding frames, not part of the pipeline
+  double load_ms_median = 0;  // waiting for the next frame (reading, decoding not hidden by the read-ahead)
+  double frame_ms_median = 0;  // FlowFusionSystem::process wall time per frame (its frameMs())
   double export_ms = 0;       // writing map.ply, map_points.ply and preview/ after the last frame (0: none)
   Timings timings;
   double peak_memory_mib = 0;

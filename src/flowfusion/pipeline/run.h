@@ -14,13 +14,16 @@ struct RunControl {
   // RunSummary::complete = false and stop_reason = *reason (e.g. a signal handler's flag).
   const std::atomic<bool>* stop = nullptr;
   const char* const* reason = nullptr;
+  // Frames read ahead on a worker thread while the current one is processed (io/prefetching_source.h);
+  // 0 reads each frame on the run's thread when it is needed (for a source whose next() must stay there).
+  size_t prefetch_frames = 2;
 };
 
 // The ground truth's pose at `timestamp` (s) when the source has one, else identity.
 SE3 initialPose(const FrameSource& source, double timestamp);
 
-// Processes every frame of `source`. A frame that throws ends the sinks with an incomplete
-// summary (the frames before it kept) and is rethrown.
+// Processes every frame of `source`. A frame that throws (also one the read-ahead failed to read)
+// ends the sinks with an incomplete summary (the frames before it kept) and is rethrown.
 RunSummary runSequence(FrameSource& source, const SystemConfig& config, const std::vector<ResultSink*>& sinks,
                        const RunControl& control = {});
 

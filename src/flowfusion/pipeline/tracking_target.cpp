@@ -53,6 +53,11 @@ bool TrackingTargets::needsKeyframe(const SE3& T_world_cam, bool tracking_ok) co
          rotationAngleDeg(T_kf_cur) > options_.keyframe_rotation_deg;
 }
 
+bool TrackingTargets::rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok) const {
+  return options_.tracking == TrackingMode::FrameToKeyframe && options_.model_keyframes &&
+         needsKeyframe(T_world_cam, tracking_ok);
+}
+
 void TrackingTargets::advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask,
                               const StaticMap* map, Timings& timings) {
   if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok)) {

@@ -54,6 +54,9 @@ class TrackingTargets {
   // that keep the frame's depth in a model keyframe.
   void advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask, const StaticMap* map,
                Timings& timings);
+  // Whether advance() with this pose and status may render the map (a new model keyframe), so the
+  // map must be complete up to that frame first.
+  bool rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok) const;
 
  private:
   // The map's depth predicted at `source`'s pose with its image as the photometric target (its
