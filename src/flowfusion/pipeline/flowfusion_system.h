@@ -35,6 +35,9 @@ class FlowFusionSystem {
   // Throws InputError naming the first bad setting.
   FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera,
                    const SE3& T_world_first = SE3::Identity());
+  // Neither copied nor moved: the stages running beside others hold `this`.
+  FlowFusionSystem(const FlowFusionSystem&) = delete;
+  FlowFusionSystem& operator=(const FlowFusionSystem&) = delete;
 
   // Processes the next frame (in time order) and returns its pose and mask. Stage times are added
   // to timings() under "odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion".
