@@ -304,6 +304,7 @@ TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameD
   ResidualImages r;
   r.r_F = (cv::Mat_<float>(1, 6) << 0.f, 0.f, 100.f, 100.f, 0.f, 0.f);
   ScoreConfig cfg;
+  cfg.body_smoothing = 2;
   const DynamicScores body = computeDynamicScores(g, r, cfg);
   EXPECT_GT(body.b[1], 0.8f);
   EXPECT_GT(body.b[2], 0.5f);  // the stance shin follows the moving one

@@ -12,30 +12,33 @@ namespace {
 constexpr double kFrameS = 1.0 / 30;  // 30 Hz, as TUM
 
 // A 16x8 frame of a still camera: the left half is the mapped wall 4 m away (cluster 0), the right
-// half a person 2 m in front of it (cluster 1), the map's wall behind the person.
+// half (from column `first_person_column`) a person 2 m in front of it (cluster 1), the map's wall
+// behind the person.
 struct PersonInFrontOfTheMap {
+  int first_person_column = 8;
   CameraIntrinsics camera{10, 10, 7.5, 3.5, 16, 8};
   ClusterGraph graph;
   cv::Mat depth;
   ResidualImages res;
   cv::Mat previous_b;  // the previous frame's scores per pixel (a still camera carries them as they are)
 
-  PersonInFrontOfTheMap() {
+  explicit PersonInFrontOfTheMap(int first_person_column_ = 8) : first_person_column(first_person_column_) {
+    const int p = first_person_column;
     graph.labels.create(8, 16, CV_32S);
     depth.create(8, 16, CV_32F);
     for (int v = 0; v < 8; ++v)
       for (int u = 0; u < 16; ++u) {
-        graph.labels.at<int>(v, u) = u < 8 ? 0 : 1;
-        depth.at<float>(v, u) = u < 8 ? 4.f : 2.f;
+        graph.labels.at<int>(v, u) = u < p ? 0 : 1;
+        depth.at<float>(v, u) = u < p ? 4.f : 2.f;
       }
     graph.num_clusters = 2;
-    graph.sizes = {64, 64};
+    graph.sizes = {8 * p, 8 * (16 - p)};
     graph.mean_depth = {4.f, 2.f};
     graph.centroids.resize(2);
     graph.edges = {{0, 1}};
     res.r_M.create(8, 16, CV_32F);
-    res.r_M.colRange(0, 8).setTo(0.f);
-    res.r_M.colRange(8, 16).setTo(2.f);  // metres in front of the map
+    res.r_M.colRange(0, p).setTo(0.f);
+    res.r_M.colRange(p, 16).setTo(2.f);  // metres in front of the map
     res.r_F.create(8, 16, CV_32F);
   }
 
@@ -43,7 +46,7 @@ struct PersonInFrontOfTheMap {
   // memory updated.
   DynamicScores frame(MotionMemory& memory, const ScoreConfig& config, int index, float person_flow_px) {
     res.r_F.setTo(0.f);
-    res.r_F.colRange(8, 16).setTo(person_flow_px);
+    res.r_F.colRange(first_person_column, 16).setTo(person_flow_px);
     res.prior = previous_b;
     const double t = index * kFrameS;
     res.memory = memory.recall(SE3::Identity(), t);
@@ -101,6 +104,19 @@ TEST(MotionMemory, AStaticSurfaceFlaggedOnceIsNotRememberedTwiceIsReleasedAfterT
     EXPECT_EQ(dynamic_frames, noisy_frames == 1 ? 0 : 15) << noisy_frames;
     EXPECT_LT(scene.frame(memory, config, 60, 0.f).b[1], 0.5f);
   }
+}
+
+TEST(MotionMemory, ARegionCoveringMostOfTheImageIsNotRemembered) {
+  // Three quarters of the image "moving": the background under a wrong pose, not a person.
+  PersonInFrontOfTheMap scene(4);
+  ScoreConfig config;
+  MotionMemory memory(config.model_memory_s, scene.camera);
+  for (int f = 0; f < 5; ++f) {
+    const DynamicScores s = scene.frame(memory, config, f, 10.f);
+    EXPECT_GT(s.b[1], 0.5f);
+    EXPECT_FALSE(s.moving[1]);
+  }
+  EXPECT_LT(scene.frame(memory, config, 5, 0.f).b[1], 0.5f);  // static as soon as it stops
 }
 
 TEST(MotionMemory, IsCarriedAlongTheCameraMotionInThreeD) {

@@ -180,8 +180,11 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   std::vector<int> cnt(K * n, 0);
   const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F,   &residuals.r_M,
                               &residuals.a_M, &residuals.prior, &residuals.memory};
+  std::vector<double> pixels_of(n, 0.0);
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
+    for (int u = 0; u < labels.cols; ++u)
+      if (l[u] >= 0 && l[u] < n) ++pixels_of[l[u]];
     for (int k = 0; k < K; ++k) {
       if (terms[k]->empty()) continue;
       const float* r = terms[k]->ptr<float>(v);
@@ -226,11 +229,20 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   // Connected groups of dynamic clusters; which of them move now, which moved recently.
   const std::vector<int> root = dynamicGroups(graph.edges, b);
   std::vector<char> moves(n, 0), remembered(n, 0);
+  std::vector<double> group_pixels(n, 0.0);
+  double pixels = 0;
   for (int c = 0; c < n; ++c) {
+    pixels += pixels_of[c];
     if (b[c] <= 0.5) continue;
+    group_pixels[root[c]] += pixels_of[c];
     if (delta[c] > config.model_motion_delta) moves[root[c]] = 1;
     if (mean(c, kMemory) >= 0.5) remembered[root[c]] = 1;
   }
+  // A group covering more than half of the clustered pixels is the background under a wrong pose,
+  // not a mover that stopped: the memory neither keeps it nor remembers it.
+  std::vector<char> minority(n);
+  for (int c = 0; c < n; ++c) minority[c] = group_pixels[c] <= 0.5 * pixels;
+  for (int c = 0; c < n; ++c) remembered[c] = remembered[c] && minority[c];
   if (config.model_needs_motion && !residuals.r_M.empty()) {
     bool dropped = false;
     for (int c = 0; c < n; ++c)
@@ -246,7 +258,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   out.moving.resize(n);
   // Motion worth remembering: the group moves now and the cluster was dynamic in the previous
   // frame too (its carried score), so a static surface flagged in one frame is not remembered.
-  for (int c = 0; c < n; ++c) out.moving[c] = b[c] > 0.5 && moves[root[c]] && prior[c] > 0.5;
+  for (int c = 0; c < n; ++c) out.moving[c] = b[c] > 0.5 && moves[root[c]] && minority[root[c]] && prior[c] > 0.5;
   return out;
 }
 
