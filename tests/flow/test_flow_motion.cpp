@@ -34,28 +34,66 @@ FlowField exactTwoMotionFlow(const AnalyticScene& scene, const SE3& T_world_b, c
 
 double translationErrorM(const SE3& a, const SE3& b) { return translationNorm(a.inverse() * b); }
 
-TEST(FlowMotion, RansacFindsTheBackgroundAgainstALargeMovingBox) {
-  const AnalyticScene scene = bigBoxScene();
-  const SE3 T_world_b = cameraMotion();
-  const SE3 T_box = expSE3((Vector6d() << 0.06, 0.0, -0.03, 0.0, 0.04, 0.0).finished());
+SE3 boxMotion() { return expSE3((Vector6d() << 0.06, 0.0, -0.03, 0.0, 0.04, 0.0).finished()); }
+
+// The big box scene's exact two-motion flow (camera and box moving) and its sampled correspondences.
+struct TwoMotionCase {
+  AnalyticScene scene = bigBoxScene();
+  SE3 T_b_a = cameraMotion().inverse();
   cv::Mat box_mask;
-  const FlowField flow = exactTwoMotionFlow(scene, T_world_b, T_box, box_mask);
-  const auto a = scene.render(SE3::Identity());
-  const FlowCorrespondences c = sampleFlowCorrespondences(flow, a.frame.depth, scene.camera, 16);
+  FlowField flow = exactTwoMotionFlow(scene, cameraMotion(), boxMotion(), box_mask);
+  cv::Mat depth_a = scene.render(SE3::Identity()).frame.depth;
+  FlowCorrespondences c = sampleFlowCorrespondences(flow, depth_a, scene.camera, 16);
+};
+
+TEST(FlowMotion, TheSplitRecoversBothMotionsAndTheMoversSamples) {
+  const TwoMotionCase t;
+  const auto& [scene, T_b_a, box_mask, flow, depth_a, c] = t;
   ASSERT_GT(c.size(), 500u);
   const double box_fraction = cv::countNonZero(box_mask) / static_cast<double>(box_mask.total());
   ASSERT_GT(box_fraction, 0.25) << "the box must be a large minority for this test";
+  const FlowMotionSplit split = splitFlowMotions(c, scene.camera, ConsensusConfig{});
+  ASSERT_TRUE(split.ok);
+  EXPECT_LT(rotationAngleDeg(split.T_b_a_background.inverse() * T_b_a), 0.05);
+  EXPECT_LT(translationErrorM(split.T_b_a_background, T_b_a), 1e-3);
+  EXPECT_LT(translationErrorM(split.T_b_a_mover, T_b_a * boxMotion()), 1e-3);
+  // Each sample in the group of the motion that made its flow.
+  int wrong = 0, on_box = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    const Eigen::Vector2d uv = scene.camera.project(Eigen::Vector3d(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z));
+    const bool box = box_mask.at<unsigned char>(static_cast<int>(std::lround(uv.y())), static_cast<int>(std::lround(uv.x()))) > 0;
+    on_box += box;
+    wrong += split.group[k] != (box ? FlowMotionSplit::kMover : FlowMotionSplit::kBackground);
+  }
+  EXPECT_LT(wrong, 0.03 * c.size());
+  EXPECT_GT(split.mover_only.size(), 0.8 * on_box);
+}
 
-  ConsensusConfig cfg;
-  const FlowMotion m = estimateFlowMotion(c, scene.camera, cfg);
-  ASSERT_TRUE(m.ok);
-  const SE3 T_b_a = T_world_b.inverse();
-  EXPECT_LT(translationErrorM(m.T_b_a, T_b_a), 1e-3);
-  EXPECT_LT(rotationAngleDeg(m.T_b_a.inverse() * T_b_a), 0.05);
-  // The box's samples are the ones left unexplained, and its own motion explains them.
-  const int box_inliers = countFlowInliers(c, scene.camera, T_b_a * T_box, cfg.inlier_px);
-  EXPECT_NEAR(m.inliers + box_inliers, static_cast<int>(c.size()), 0.03 * c.size());
-  EXPECT_GT(m.inliers, box_inliers);
+TEST(FlowMotion, TheMoverIsFoundAndACapturedOdometryIsTold) {
+  const TwoMotionCase t;
+  const auto& [scene, T_b_a, box_mask, flow, depth_a, c] = t;
+  const ConsensusConfig cfg;
+  // A correct odometry: the mover is found, the odometry was not captured.
+  const auto split = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
+  ASSERT_TRUE(split);
+  EXPECT_TRUE(showsMover(*split, c, cfg));
+  EXPECT_LT(translationErrorM(split->T_b_a_background, T_b_a), 1e-3);
+  EXPECT_FALSE(misledOdometry(c, scene.camera, *split, T_b_a, cfg));
+  // One that followed the box: the same split, and a capture.
+  const auto followed = splitFlowAgainst(c, scene.camera, T_b_a * boxMotion(), cfg);
+  ASSERT_TRUE(followed);
+  EXPECT_LT(translationErrorM(followed->T_b_a_background, T_b_a), 1e-3);
+  EXPECT_TRUE(misledOdometry(c, scene.camera, *followed, T_b_a * boxMotion(), cfg));
+  // Nothing moves: nothing to split off a correct odometry; a wrong one is told by the gain.
+  const FlowField still{egoFlow(depth_a, scene.camera, T_b_a)};
+  const FlowCorrespondences c_still = sampleFlowCorrespondences(still, depth_a, scene.camera, 16);
+  EXPECT_FALSE(splitFlowAgainst(c_still, scene.camera, T_b_a, cfg));
+  SE3 wrong = T_b_a;
+  wrong.translation() += Eigen::Vector3d(0.05, 0.0, 0.0);
+  const auto off = splitFlowAgainst(c_still, scene.camera, wrong, cfg);
+  ASSERT_TRUE(off);
+  EXPECT_FALSE(showsMover(*off, c_still, cfg));
+  EXPECT_TRUE(misledOdometry(c_still, scene.camera, *off, wrong, cfg));
 }
 
 TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
@@ -69,14 +107,14 @@ TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
   fc.downscale = 1;
   const FlowField flow = makeOpticalFlow(fc)->compute(a.frame.intensity, b.frame.intensity);
   const FlowCorrespondences c = sampleFlowCorrespondences(flow, a.frame.depth, scene.camera, 16);
-  const FlowMotion m = estimateFlowMotion(c, scene.camera, ConsensusConfig{});
-  ASSERT_TRUE(m.ok);
+  const FlowMotionSplit split = splitFlowMotions(c, scene.camera, ConsensusConfig{});
+  ASSERT_TRUE(split.ok);
   const SE3 T_b_a = T_world_b.inverse();
-  EXPECT_LT(translationErrorM(m.T_b_a, T_b_a), 5e-3);
-  EXPECT_LT(rotationAngleDeg(m.T_b_a.inverse() * T_b_a), 0.2);
+  EXPECT_LT(translationErrorM(split.T_b_a_background, T_b_a), 5e-3);
+  EXPECT_LT(rotationAngleDeg(split.T_b_a_background.inverse() * T_b_a), 0.2);
 }
 
-TEST(FlowMotion, TooFewSamplesGiveNoMotion) {
+TEST(FlowMotion, TooFewSamplesGiveNoSplit) {
   const AnalyticScene scene = AnalyticScene::make(320, 240);
   const auto a = scene.render(SE3::Identity());
   cv::Mat sparse_depth(a.frame.depth.size(), CV_32F, cv::Scalar(0));
@@ -84,7 +122,7 @@ TEST(FlowMotion, TooFewSamplesGiveNoMotion) {
   const FlowField flow{egoFlow(a.frame.depth, scene.camera, cameraMotion())};
   const FlowCorrespondences c = sampleFlowCorrespondences(flow, sparse_depth, scene.camera, 16);
   EXPECT_LT(c.size(), 30u);
-  EXPECT_FALSE(estimateFlowMotion(c, scene.camera, ConsensusConfig{}).ok);
+  EXPECT_FALSE(splitFlowMotions(c, scene.camera, ConsensusConfig{}).ok);
 }
 
 TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
@@ -96,7 +134,10 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   bad.inlier_px = 0;
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
-  bad.min_gain = 1.5;
+  bad.min_mover_share = 1.5;
+  EXPECT_THROW(validate(bad), InputError);
+  bad = ConsensusConfig{};
+  bad.min_captured = 0;
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.grid_step = 0;

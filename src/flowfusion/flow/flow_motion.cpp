@@ -1,7 +1,13 @@
 #include "flowfusion/flow/flow_motion.h"
 
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <random>
 
 #include "flowfusion/core/error.h"
 
@@ -11,6 +17,10 @@ void validate(const ConsensusConfig& c) {
   if (c.grid_step < 1) throw InputError("consensus.grid_step must be at least 1 (pixels)");
   if (!(c.inlier_px > 0)) throw InputError("consensus.inlier_px must be > 0 (pixels)");
   if (c.ransac_iterations < 1) throw InputError("consensus.ransac_iterations must be at least 1");
+  if (c.local_hypotheses < 0) throw InputError("consensus.local_hypotheses must be at least 0");
+  if (!(c.min_mover_share > 0 && c.min_mover_share < 1))
+    throw InputError("consensus.min_mover_share must be in (0, 1)");
+  if (!(c.min_captured > 0 && c.min_captured <= 1)) throw InputError("consensus.min_captured must be in (0, 1]");
   if (!(c.min_gain >= 0 && c.min_gain <= 1)) throw InputError("consensus.min_gain must be in [0, 1]");
 }
 
@@ -36,14 +46,20 @@ FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::M
 
 namespace {
 
-// Whether T_b_a takes correspondence i's point within sqrt(r2) pixels of its flow target.
-bool explains(const FlowCorrespondences& c, size_t i, const CameraIntrinsics& camera, const SE3& T_b_a, double r2) {
+// Squared pixel distance between where T_b_a takes correspondence i's point and its flow target
+// (infinite behind the camera).
+double squaredError(const FlowCorrespondences& c, size_t i, const CameraIntrinsics& camera, const SE3& T_b_a) {
   const cv::Point3f& p = c.points_a[i];
   const Eigen::Vector3d q = T_b_a * Eigen::Vector3d(p.x, p.y, p.z);
-  if (q.z() <= 0) return false;
+  if (q.z() <= 0) return std::numeric_limits<double>::infinity();
   const Eigen::Vector2d uv = camera.project(q);
   const double du = uv.x() - c.pixels_b[i].x, dv = uv.y() - c.pixels_b[i].y;
-  return du * du + dv * dv < r2;
+  return du * du + dv * dv;
+}
+
+// Whether T_b_a takes correspondence i's point within sqrt(r2) pixels of its flow target.
+bool explains(const FlowCorrespondences& c, size_t i, const CameraIntrinsics& camera, const SE3& T_b_a, double r2) {
+  return squaredError(c, i, camera, T_b_a) < r2;
 }
 
 SE3 fromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
@@ -59,6 +75,116 @@ SE3 fromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
   return orthonormalized(T);
 }
 
+void toRvecTvec(const SE3& T, cv::Mat& rvec, cv::Mat& tvec) {
+  cv::Mat R;
+  const Eigen::Matrix3d R_e = T.linear();
+  const Eigen::Vector3d t_e = T.translation();
+  cv::eigen2cv(R_e, R);
+  cv::Rodrigues(R, rvec);
+  cv::eigen2cv(t_e, tvec);
+}
+
+cv::Mat cameraMatrix(const CameraIntrinsics& camera) {
+  cv::Mat K;
+  cv::eigen2cv(camera.K(), K);
+  return K;
+}
+
+// The correspondences `subset` of c.
+template <class Index>
+FlowCorrespondences subsetOf(const FlowCorrespondences& c, const std::vector<Index>& subset) {
+  FlowCorrespondences out;
+  for (const Index i : subset) {
+    out.points_a.push_back(c.points_a[i]);
+    out.pixels_b.push_back(c.pixels_b[i]);
+  }
+  return out;
+}
+
+// T refined by Levenberg-Marquardt on the correspondences `subset` (unchanged with fewer than 6).
+SE3 refineOn(const FlowCorrespondences& c, const std::vector<int>& subset, const CameraIntrinsics& camera, const SE3& T) {
+  constexpr size_t kMinPoints = 6;
+  if (subset.size() < kMinPoints) return T;
+  const FlowCorrespondences s = subsetOf(c, subset);
+  cv::Mat rvec, tvec;
+  toRvecTvec(T, rvec, tvec);
+  const cv::TermCriteria stop(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 10, 1e-6);
+  cv::solvePnPRefineLM(s.points_a, s.pixels_b, cameraMatrix(camera), cv::noArray(), rvec, tvec, stop);
+  return fromRvecTvec(rvec, tvec);
+}
+
+// Motions from four correspondences each (AP3P): `global` drawn anywhere, `local` within one image
+// neighbourhood (a fifth of the image width).
+std::vector<SE3> drawHypotheses(const FlowCorrespondences& c, const CameraIntrinsics& camera, int global, int local) {
+  std::mt19937 rng(20201);  // fixed: the same flow gives the same split
+  std::uniform_int_distribution<size_t> pick(0, c.size() - 1);
+  const double radius2 = std::pow(camera.width / 5.0, 2);
+  const cv::Mat K = cameraMatrix(camera);
+  std::vector<SE3> out;
+  for (int h = 0; h < global + local; ++h) {
+    std::vector<size_t> idx{pick(rng)};
+    const cv::Point3f& p0 = c.points_a[idx[0]];
+    const Eigen::Vector2d uv0 = camera.project(Eigen::Vector3d(p0.x, p0.y, p0.z));
+    for (int tries = 0; idx.size() < 4 && tries < 200; ++tries) {
+      const size_t j = pick(rng);
+      if (std::find(idx.begin(), idx.end(), j) != idx.end()) continue;
+      const cv::Point3f& p = c.points_a[j];
+      if (h >= global && (camera.project(Eigen::Vector3d(p.x, p.y, p.z)) - uv0).squaredNorm() > radius2) continue;
+      idx.push_back(j);
+    }
+    if (idx.size() < 4) continue;
+    const FlowCorrespondences s = subsetOf(c, idx);
+    cv::Mat rvec, tvec;
+    if (cv::solvePnP(s.points_a, s.pixels_b, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_AP3P))
+      out.push_back(fromRvecTvec(rvec, tvec));
+  }
+  return out;
+}
+
+// Which correspondences each motion explains within inlier_px, one bit each.
+using InlierBits = std::vector<std::uint64_t>;
+InlierBits inlierBits(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T, double inlier_px) {
+  InlierBits bits((c.size() + 63) / 64, 0);
+  for (size_t i = 0; i < c.size(); ++i)
+    if (explains(c, i, camera, T, inlier_px * inlier_px)) bits[i / 64] |= std::uint64_t{1} << (i % 64);
+  return bits;
+}
+
+// The indices (i, j) of the two motions that explain the most correspondences one of them alone:
+// a far background both a correct and a slightly wrong camera motion explain does not make a pair
+// of them look like two motions.
+std::pair<int, int> bestPair(const std::vector<InlierBits>& bits) {
+  std::pair<int, int> best{-1, -1};
+  int best_cover = -1;
+  for (size_t i = 0; i < bits.size(); ++i)
+    for (size_t j = i + 1; j < bits.size(); ++j) {
+      int cover = 0;
+      for (size_t w = 0; w < bits[i].size(); ++w) cover += std::popcount(bits[i][w] ^ bits[j][w]);
+      if (cover > best_cover) {
+        best_cover = cover;
+        best = {static_cast<int>(i), static_cast<int>(j)};
+      }
+    }
+  return best;
+}
+
+// The split of the two motions given their roles.
+FlowMotionSplit withRoles(const FlowCorrespondences& c, const CameraIntrinsics& camera, const ConsensusConfig& config,
+                          const SE3& T_b_a_background, const SE3& T_b_a_mover) {
+  FlowMotionSplit split;
+  split.T_b_a_background = T_b_a_background;
+  split.T_b_a_mover = T_b_a_mover;
+  const double r2 = config.inlier_px * config.inlier_px;
+  split.group.assign(c.size(), FlowMotionSplit::kNeither);
+  for (size_t k = 0; k < c.size(); ++k) {
+    const double e_bg = squaredError(c, k, camera, T_b_a_background), e_mv = squaredError(c, k, camera, T_b_a_mover);
+    if (std::min(e_bg, e_mv) <= 4 * r2) split.group[k] = e_bg <= e_mv ? FlowMotionSplit::kBackground : FlowMotionSplit::kMover;
+    if (e_mv < r2 && e_bg > 9 * r2) split.mover_only.push_back(static_cast<int>(k));
+  }
+  split.ok = true;
+  return split;
+}
+
 }  // namespace
 
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
@@ -68,47 +194,67 @@ int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camer
   return n;
 }
 
-FlowMotion estimateFlowMotion(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                              const ConsensusConfig& config) {
-  FlowMotion m;
-  // Fewer samples than this say nothing about which motion dominates the view.
+FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                                 const ConsensusConfig& config, const std::vector<SE3>& seeds) {
+  FlowMotionSplit split;
+  // Fewer samples than this say nothing about which motions the view holds.
   constexpr size_t kMinSamples = 30;
-  if (c.size() < kMinSamples) return m;
-  cv::Mat K;
-  cv::eigen2cv(camera.K(), K);
-  cv::Mat rvec, tvec;
-  if (!cv::solvePnPRansac(c.points_a, c.pixels_b, K, cv::noArray(), rvec, tvec, false, config.ransac_iterations,
-                          static_cast<float>(config.inlier_px), 0.999, cv::noArray(), cv::SOLVEPNP_AP3P))
-    return m;
-  // Least squares (Levenberg-Marquardt on the reprojection error) over all the correspondences
-  // the RANSAC motion explains, not only its consensus set's final count.
-  std::vector<cv::Point3f> in_a;
-  std::vector<cv::Point2f> in_b;
-  const SE3 T_ransac = fromRvecTvec(rvec, tvec);
-  for (size_t i = 0; i < c.size(); ++i) {
-    if (!explains(c, i, camera, T_ransac, config.inlier_px * config.inlier_px)) continue;
-    in_a.push_back(c.points_a[i]);
-    in_b.push_back(c.pixels_b[i]);
+  if (c.size() < kMinSamples) return split;
+  std::vector<SE3> motions = seeds;
+  for (const SE3& T : drawHypotheses(c, camera, config.ransac_iterations, config.local_hypotheses))
+    motions.push_back(T);
+  if (motions.size() < 2) return split;
+  std::vector<InlierBits> bits;
+  for (const SE3& T : motions) bits.push_back(inlierBits(c, camera, T, config.inlier_px));
+  const auto [i, j] = bestPair(bits);
+  SE3 T_first = motions[i], T_second = motions[j];
+  const double r2 = config.inlier_px * config.inlier_px;
+  // Each sample goes to the motion that explains it better (within 2 inlier_px), each motion is
+  // re-fitted on its samples.
+  const double assign_r2 = 4 * r2;
+  int n_first = 0, n_second = 0;
+  constexpr int kRefinements = 3;
+  for (int round = 0; round <= kRefinements; ++round) {
+    std::vector<int> first, second;
+    for (size_t k = 0; k < c.size(); ++k) {
+      const double e1 = squaredError(c, k, camera, T_first), e2 = squaredError(c, k, camera, T_second);
+      if (std::min(e1, e2) <= assign_r2) (e1 <= e2 ? first : second).push_back(static_cast<int>(k));
+    }
+    n_first = static_cast<int>(first.size());
+    n_second = static_cast<int>(second.size());
+    if (round == kRefinements) break;
+    T_first = refineOn(c, first, camera, T_first);
+    T_second = refineOn(c, second, camera, T_second);
   }
-  constexpr size_t kMinInliers = 6;
-  if (in_a.size() < kMinInliers) return m;
-  cv::solvePnPRefineLM(in_a, in_b, K, cv::noArray(), rvec, tvec);
-  m.T_b_a = fromRvecTvec(rvec, tvec);
-  m.inliers = countFlowInliers(c, camera, m.T_b_a, config.inlier_px);
-  m.ok = true;
-  return m;
+  // The background's is the motion of the larger group.
+  if (n_second > n_first) std::swap(T_first, T_second);
+  return withRoles(c, camera, config, T_first, T_second);
 }
 
-std::optional<SE3> flowConsensusMotion(const FlowField& flow, const cv::Mat& depth_a, const CameraIntrinsics& camera,
-                                       const SE3& T_b_a_odometry, const ConsensusConfig& config) {
-  const FlowCorrespondences c = sampleFlowCorrespondences(flow, depth_a, camera, config.grid_step);
+std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                                                const SE3& T_b_a_odometry, const ConsensusConfig& config) {
+  const double off_odometry = static_cast<double>(c.size()) - countFlowInliers(c, camera, T_b_a_odometry, config.inlier_px);
+  if (off_odometry < config.min_mover_share * static_cast<double>(c.size())) return std::nullopt;
+  FlowMotionSplit split = splitFlowMotions(c, camera, config, {T_b_a_odometry});
+  if (!split.ok) return std::nullopt;
+  return split;
+}
+
+bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, const ConsensusConfig& config) {
+  return static_cast<double>(split.mover_only.size()) >= config.min_mover_share * static_cast<double>(c.size());
+}
+
+bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,
+                    const SE3& T_b_a_odometry, const ConsensusConfig& config) {
+  const double loose_px = 2 * config.inlier_px;
   const double n = static_cast<double>(c.size());
-  const int explained = countFlowInliers(c, camera, T_b_a_odometry, config.inlier_px);
-  // RANSAC cannot win by min_gain when the odometry already explains this much.
-  if (explained >= (1.0 - config.min_gain) * n) return std::nullopt;
-  const FlowMotion m = estimateFlowMotion(c, camera, config);
-  if (!m.ok || m.inliers < explained + config.min_gain * n) return std::nullopt;
-  return m.T_b_a;
+  if (countFlowInliers(c, camera, split.T_b_a_background, loose_px) >=
+      countFlowInliers(c, camera, T_b_a_odometry, loose_px) + config.min_gain * n)
+    return true;
+  if (!showsMover(split, c, config)) return false;
+  int captured = 0;
+  for (const int k : split.mover_only) captured += explains(c, k, camera, T_b_a_odometry, loose_px * loose_px);
+  return captured >= config.min_captured * static_cast<double>(split.mover_only.size());
 }
 
 }  // namespace ff

@@ -1,13 +1,15 @@
 #pragma once
-// The camera motion that the optical flow's largest rigid part explains (RANSAC over PnP on
-// flow correspondences with the current frame's depth).
+// The rigid motions in the optical flow: the camera's (the background's) and a mover's, found from
+// flow correspondences with the current frame's depth (RANSAC over PnP).
 //
 // Why: dense robust odometry converges to whatever motion its starting point and weights favour.
 // When a large near object moves before anything is known of it (the first frames, an object
-// walking into view), the odometry can lock onto the object, every later stage then calls the
-// background dynamic and the carried scores keep the error going. The flow's rigid consensus
-// does not depend on the odometry: where it explains clearly more of the image than the
-// odometry's motion, the odometry is restarted from it (pipeline/segmentation_loop.h).
+// walking into view), the odometry can lock onto the object, or, under fast rotation, settle part
+// way between the object and a far background that cannot pin the translation down; every later
+// stage then scores against a wrong motion and the carried scores keep the error going. A split
+// of the flow into two rigid motions does not depend on the odometry: where the odometry's motion
+// explains the flow that only the mover's motion explains, the odometry was captured and is
+// restarted from the background's motion with the mover marked (pipeline/segmentation_loop.h).
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -19,20 +21,30 @@
 
 namespace ff {
 
+// The defaults and the measurements behind them: docs/tuning.md#consensus.
 struct ConsensusConfig {
   bool enabled = true;
   int grid_step = 16;           // px: flow correspondences sampled on this grid of the input image
-  // px: reprojection error of a correspondence the motion explains. Loose because TUM's colour
-  // and depth images are up to 20 ms apart, so a correct odometry explains the real flow less
-  // exactly than the synthetic one (docs/tuning.md#consensus).
-  double inlier_px = 3.0;
-  int ransac_iterations = 100;  // minimal-sample (P3P) hypotheses
-  // The flow's motion replaces the odometry's when it explains at least this fraction of the
-  // samples more: a restart that does not help costs one more odometry (docs/tuning.md#consensus).
+  // px: reprojection error of a correspondence a motion explains, in the split of the flow into
+  // two motions (tight: the flow of the colour images fits its own motions within a pixel).
+  double inlier_px = 1.5;
+  // Minimal-sample (P3P) motion hypotheses searched for the pair: drawn anywhere in the image (as
+  // RANSAC draws them) and drawn within one image neighbourhood (so that they lie on one object).
+  int ransac_iterations = 100;
+  int local_hypotheses = 100;
+  // The mover counts when this share of the samples is explained by its motion within inlier_px
+  // and left by the background's beyond 3 inlier_px.
+  double min_mover_share = 0.07;
+  // The odometry was captured by the mover when its motion explains at least this share of the
+  // mover's samples within 2 inlier_px (a correct odometry leaves them: they are 3 inlier_px off
+  // the background's motion; the allowance covers colour-depth time offsets).
+  double min_captured = 0.3;
+  // Or restart when the background's motion explains at least this share of the samples more
+  // than the odometry's, within 2 inlier_px (an odometry plainly wrong, mover or not).
   double min_gain = 0.3;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
-                                                min_gain)
+                                                local_hypotheses, min_mover_share, min_captured, min_gain)
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -52,19 +64,40 @@ FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::M
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
                      double inlier_px);
 
-struct FlowMotion {
-  bool ok = false;       // false: too few correspondences or RANSAC found no motion
-  SE3 T_b_a = SE3::Identity();
-  int inliers = 0;       // of the correspondences, counted with countFlowInliers
+// Two motions that together explain the flow: the background's (the larger group, taken as the
+// camera's) and a mover's. Per correspondence, `group` says which explains it (kNeither when
+// neither does within 2 inlier_px).
+struct FlowMotionSplit {
+  enum Group : unsigned char { kBackground = 0, kMover = 1, kNeither = 2 };
+  bool ok = false;  // false: too few correspondences or no pair found
+  SE3 T_b_a_background = SE3::Identity();
+  SE3 T_b_a_mover = SE3::Identity();
+  std::vector<unsigned char> group;
+  // Correspondences the mover explains within inlier_px and the background leaves beyond
+  // 3 inlier_px: the mover's own evidence.
+  std::vector<int> mover_only;
 };
 
-// RANSAC (P3P hypotheses, refined on the inliers) over the correspondences.
-FlowMotion estimateFlowMotion(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                              const ConsensusConfig& config);
+// The pair among `seeds` and the minimal-sample hypotheses that explains the most correspondences
+// with one motion of the two alone within inlier_px (a far background that a correct and a
+// slightly wrong camera motion both explain does not make them a pair), then refined by
+// alternately assigning each correspondence to the motion that explains it better and re-fitting
+// both (Levenberg-Marquardt). Deterministic.
+FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                                 const ConsensusConfig& config, const std::vector<SE3>& seeds = {});
 
-// The flow's rigid motion T_b_a when it explains at least config.min_gain of the sampled flow
-// more than `T_b_a_odometry` does; none otherwise (what the system restarts its odometry from).
-std::optional<SE3> flowConsensusMotion(const FlowField& flow, const cv::Mat& depth_a, const CameraIntrinsics& camera,
-                                       const SE3& T_b_a_odometry, const ConsensusConfig& config);
+// The split of the sampled flow, seeded with the odometry's motion; none when that motion explains
+// all but min_mover_share of the samples within inlier_px (nothing else to find).
+std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                                                const SE3& T_b_a_odometry, const ConsensusConfig& config);
+
+// Whether the split shows a mover: at least min_mover_share of the samples are the mover's own.
+bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, const ConsensusConfig& config);
+
+// Whether the odometry's motion T_b_a_odometry is to restart from the split's background motion:
+// it explains the mover's own flow (min_captured: it followed the mover, wholly or part way), or
+// the background's motion explains at least min_gain of the samples more within 2 inlier_px.
+bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,
+                    const SE3& T_b_a_odometry, const ConsensusConfig& config);
 
 }  // namespace ff

@@ -33,7 +33,8 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       odometry_(config.odometry),
       refine_odometry_(refineConfig(config)),
       flow_(makeOpticalFlow(config.flow)),
-      clusterer_(makeClusterer(config.clustering)) {}
+      clusterer_(makeClusterer(config.clustering)),
+      memory_(config.scores.model_memory_s, seg_camera_) {}
 
 cv::Mat SegmentationLoop::flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const {
   const int level = config_.pipeline.segmentation_level;
@@ -52,25 +53,38 @@ void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, M
 
 void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
                                        Timings& timings) {
-  std::optional<SE3> T_prev_cur_flow;
+  std::optional<FlowMotionSplit> split;
+  FlowCorrespondences samples;
+  const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
   {
     StageTimer timer(timings, "consensus");
-    T_prev_cur_flow = flowConsensusMotion(flow, in.frame.depth, camera_,
-                                          in.T_target_prev.inverse() * estimate.T_target_cur, config_.consensus);
+    samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step);
+    split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus);
   }
-  if (!T_prev_cur_flow) return;
-  // The carried scores belong to the motion just rejected: the flow's own split replaces them.
-  const cv::Mat outliers = flowResidualAt(flow, in.cur, *T_prev_cur_flow) > config_.consensus.inlier_px;
-  cv::Mat flow_scores;
-  outliers.convertTo(flow_scores, CV_32F, 1.0 / 255);
+  if (!split) return;
+  cv::Mat mover = moverScores(flow, in.cur, *split);
+  if (showsMover(*split, samples, config_.consensus)) estimate.flow_mover = mover;
+  if (!misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus)) return;
+  // The carried scores belong to the motion just rejected: the split's mover replaces them.
   StageTimer timer(timings, "odometry");
-  const OdometryResult again = odometry_.estimate(in.cur, *in.target.odo, in.T_target_prev * *T_prev_cur_flow,
-                                                  staticWeights(flow_scores), *in.target.weights);
+  const OdometryResult again = odometry_.estimate(in.cur, *in.target.odo, in.T_target_prev * split->T_b_a_background,
+                                                  staticWeights(mover), *in.target.weights);
   if (!again.ok) return;
   estimate.odometry = again;
   estimate.T_target_cur = again.T_target_source;
-  estimate.scores = flow_scores;
+  estimate.scores = mover;
   estimate.restarted_from_flow = true;
+}
+
+cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const {
+  // 1 where the mover's motion explains the flow and the background's does not.
+  const double off_px = 2 * config_.consensus.inlier_px;
+  const cv::Mat r_background = flowResidualAt(flow, cur, split.T_b_a_background);
+  const cv::Mat r_mover = flowResidualAt(flow, cur, split.T_b_a_mover);
+  const cv::Mat mover = (r_background > off_px) & (r_mover < 0.5 * r_background);
+  cv::Mat scores;
+  mover.convertTo(scores, CV_32F, 1.0 / 255);
+  return scores;
 }
 
 std::pair<cv::Mat, cv::Mat> SegmentationLoop::mapEvidence(const SegmentationInput& in, const SE3& T_world_cur,
@@ -112,6 +126,13 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     res.prior = carryScores(in.previous.scores, in.previous.depthAt(level), seg_camera_, T_prev_cur.inverse(),
                             std::numeric_limits<float>::quiet_NaN());
   }
+  res.memory = memory_.recall(in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
+  DynamicScores scores;
+  if (!estimate.flow_mover.empty()) {
+    // The flow's own mover is a mover a priori; elsewhere the carried scores, if any.
+    if (res.prior.empty()) res.prior = cv::Mat(estimate.flow_mover.size(), CV_32F, std::numeric_limits<float>::quiet_NaN());
+    res.prior.setTo(1.f, estimate.flow_mover > 0);
+  }
   for (int round = 0; round < opt.max_iterations; ++round) {
     {
       StageTimer timer(timings, "scores");
@@ -120,7 +141,8 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.r_F = flowResidualAt(flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
-      estimate.scores = pixelScores(graph, computeDynamicScores(graph, res, config_.scores));
+      scores = computeDynamicScores(graph, res, config_.scores);
+      estimate.scores = pixelScores(graph, scores);
     }
     StageTimer timer(timings, "odometry");
     const OdometryResult again =
@@ -132,6 +154,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     estimate.T_target_cur = again.T_target_source;
     if (done) break;
   }
+  memory_.remember(graph, scores, seg_frame.depth, in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
 }
 
 }  // namespace ff

@@ -12,9 +12,11 @@
 #include <memory>
 
 #include "flowfusion/core/timings.h"
+#include "flowfusion/flow/flow_motion.h"
 #include "flowfusion/flow/optical_flow.h"
 #include "flowfusion/pipeline/tracking_target.h"
 #include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/motion_memory.h"
 
 namespace ff {
 
@@ -23,6 +25,7 @@ struct MotionEstimate {
   OdometryResult odometry;   // the last successful full estimate (or the failed first one)
   SE3 T_target_cur;          // current-camera points into the target camera
   cv::Mat scores;            // b per pixel at the segmentation level; empty when none
+  cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool restarted_from_flow = false;
   int rounds = 0;            // score <-> odometry rounds run
 };
@@ -50,6 +53,9 @@ class SegmentationLoop {
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image.
   cv::Mat flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
   void restartFromFlow(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+  // 1 where the split's mover motion explains the flow and its background motion does not (CV_32F
+  // at the segmentation level).
+  cv::Mat moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const;
   // The static map's occlusion r_M and agreement a_M at the current estimate (empty when off).
   std::pair<cv::Mat, cv::Mat> mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
                                           Timings& timings) const;
@@ -62,6 +68,7 @@ class SegmentationLoop {
   DenseOdometry refine_odometry_;  // the rounds' re-estimates (refine_iterations per level)
   std::unique_ptr<OpticalFlow> flow_;
   std::unique_ptr<Clusterer> clusterer_;
+  MotionMemory memory_;  // where objects moved, for the scores' model term (scores.model_memory_s)
 };
 
 }  // namespace ff
