@@ -242,16 +242,22 @@ TEST(DynamicScores, AgreementWithTheMapScalesTheMotionTerms) {
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }
 
-TEST(DynamicScores, ModelTermKeepsOnlyGroupsThatMove) {
-  // Clusters 0-1 touch (one object, only cluster 0 shows motion); cluster 2 is alone (a thin
-  // static structure the map never fused). All three lie 2 m in front of the model.
+// Three clusters of two pixels each on one row (labels 0 0 1 1 2 2), at the given mean depths.
+ClusterGraph threeClusters(std::vector<float> mean_depth, std::vector<std::pair<int, int>> edges) {
   ClusterGraph g;
   g.labels = (cv::Mat_<int>(1, 6) << 0, 0, 1, 1, 2, 2);
   g.num_clusters = 3;
   g.sizes = {2, 2, 2};
-  g.mean_depth = {1.0f, 1.0f, 1.0f};
+  g.mean_depth = std::move(mean_depth);
   g.centroids.resize(3);
-  g.edges = {{0, 1}};
+  g.edges = std::move(edges);
+  return g;
+}
+
+TEST(DynamicScores, ModelTermKeepsOnlyGroupsThatMove) {
+  // Clusters 0-1 touch (one object, only cluster 0 shows motion); cluster 2 is alone (a thin
+  // static structure the map never fused). All three lie 2 m in front of the model.
+  const ClusterGraph g = threeClusters({1.0f, 1.0f, 1.0f}, {{0, 1}});
   ResidualImages r;
   r.r_F = (cv::Mat_<float>(1, 6) << 10.f, 10.f, 0.f, 0.f, 0.f, 0.f);
   r.r_M = cv::Mat(1, 6, CV_32F, cv::Scalar(2.0f));
@@ -294,13 +300,7 @@ TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameD
   // A walker without a map behind him (no model term): a swinging shin (cluster 1, 2 m, large flow
   // residual), the stance shin beside it (cluster 2, 2.05 m, still), the wall (cluster 0, 4 m),
   // all three adjacent.
-  ClusterGraph g;
-  g.labels = (cv::Mat_<int>(1, 6) << 0, 0, 1, 1, 2, 2);
-  g.num_clusters = 3;
-  g.sizes = {2, 2, 2};
-  g.mean_depth = {4.0f, 2.0f, 2.05f};
-  g.centroids.resize(3);
-  g.edges = {{0, 1}, {0, 2}, {1, 2}};
+  const ClusterGraph g = threeClusters({4.0f, 2.0f, 2.05f}, {{0, 1}, {0, 2}, {1, 2}});
   ResidualImages r;
   r.r_F = (cv::Mat_<float>(1, 6) << 0.f, 0.f, 100.f, 100.f, 0.f, 0.f);
   ScoreConfig cfg;
