@@ -140,9 +140,6 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   bad.min_captured = 0;
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
-  bad.background_depth_ratio = 0.5;
-  EXPECT_THROW(validate(bad), InputError);
-  bad = ConsensusConfig{};
   bad.grid_step = 0;
   EXPECT_THROW(validate(bad), InputError);
 }

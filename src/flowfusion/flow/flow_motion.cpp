@@ -22,7 +22,6 @@ void validate(const ConsensusConfig& c) {
     throw InputError("consensus.min_mover_share must be in (0, 1)");
   if (!(c.min_captured > 0 && c.min_captured <= 1)) throw InputError("consensus.min_captured must be in (0, 1]");
   if (!(c.min_gain >= 0 && c.min_gain <= 1)) throw InputError("consensus.min_gain must be in [0, 1]");
-  if (!(c.background_depth_ratio >= 1)) throw InputError("consensus.background_depth_ratio must be at least 1");
 }
 
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
@@ -89,15 +88,6 @@ cv::Mat cameraMatrix(const CameraIntrinsics& camera) {
   cv::Mat K;
   cv::eigen2cv(camera.K(), K);
   return K;
-}
-
-// Median depth (metres) of the correspondences `subset` of c (0 when empty).
-double medianDepth(const FlowCorrespondences& c, const std::vector<int>& subset) {
-  if (subset.empty()) return 0.0;
-  std::vector<float> z;
-  for (const int i : subset) z.push_back(c.points_a[i].z);
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  return z[z.size() / 2];
 }
 
 // The correspondences `subset` of c.
@@ -222,24 +212,22 @@ FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntri
   // Each sample goes to the motion that explains it better (within 2 inlier_px), each motion is
   // re-fitted on its samples.
   const double assign_r2 = 4 * r2;
-  std::vector<int> first, second;
+  int n_first = 0, n_second = 0;
   constexpr int kRefinements = 3;
   for (int round = 0; round <= kRefinements; ++round) {
-    first.clear();
-    second.clear();
+    std::vector<int> first, second;
     for (size_t k = 0; k < c.size(); ++k) {
       const double e1 = squaredError(c, k, camera, T_first), e2 = squaredError(c, k, camera, T_second);
       if (std::min(e1, e2) <= assign_r2) (e1 <= e2 ? first : second).push_back(static_cast<int>(k));
     }
+    n_first = static_cast<int>(first.size());
+    n_second = static_cast<int>(second.size());
     if (round == kRefinements) break;
     T_first = refineOn(c, first, camera, T_first);
     T_second = refineOn(c, second, camera, T_second);
   }
-  // The background's is the motion of the clearly farther group, else of the larger one.
-  const double z1 = medianDepth(c, first), z2 = medianDepth(c, second);
-  const double ratio = config.background_depth_ratio;
-  const bool second_is_background = z2 > ratio * z1 || (z1 <= ratio * z2 && second.size() > first.size());
-  if (second_is_background) std::swap(T_first, T_second);
+  // The background's is the motion of the larger group.
+  if (n_second > n_first) std::swap(T_first, T_second);
   return withRoles(c, camera, config, T_first, T_second);
 }
 

@@ -42,13 +42,9 @@ struct ConsensusConfig {
   // Or restart when the background's motion explains at least this share of the samples more
   // than the odometry's, within 2 inlier_px (an odometry plainly wrong, mover or not).
   double min_gain = 0.3;
-  // The background's motion is that of the group whose median depth is at least this many times
-  // the other's (a mover filling most of a near view); otherwise that of the larger group.
-  double background_depth_ratio = 1.5;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
-                                                local_hypotheses, min_mover_share, min_captured, min_gain,
-                                                background_depth_ratio)
+                                                local_hypotheses, min_mover_share, min_captured, min_gain)
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -68,9 +64,9 @@ FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::M
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
                      double inlier_px);
 
-// Two motions that together explain the flow: the background's (taken as the camera's: the
-// clearly farther group's, else the larger group's) and a mover's. Per correspondence, `group`
-// says which explains it (kNeither when neither does within 2 inlier_px).
+// Two motions that together explain the flow: the background's (the larger group, taken as the
+// camera's) and a mover's. Per correspondence, `group` says which explains it (kNeither when
+// neither does within 2 inlier_px).
 struct FlowMotionSplit {
   enum Group : unsigned char { kBackground = 0, kMover = 1, kNeither = 2 };
   bool ok = false;  // false: too few correspondences or no pair found
