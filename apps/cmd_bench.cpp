@@ -9,6 +9,7 @@
 
 #include "command.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/timings.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/eval/reference_odometry.h"
 #include "flowfusion/eval/segmentation_metrics.h"
@@ -68,7 +69,7 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
   const auto start = std::chrono::steady_clock::now();
   TumFolderSource source(seq, c.system.frames.empty() ? FrameRange{} : parseFrameRange(c.system.frames));
   const RunSummary s = runSequence(source, config, {&files});
-  const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double wall_ms = msSince(start);
   Row row;
   row.sequence = label;
   row.method = method;
@@ -105,7 +106,7 @@ Row runReference(const TumSequence& seq, const std::string& label, eval::Referen
   }
   const auto start = std::chrono::steady_clock::now();
   const eval::ReferenceRun run = eval::runReferenceOdometry(method, seq, max_frames);
-  const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double wall_ms = msSince(start);
   Row row;
   row.sequence = label;
   row.method = eval::methodName(method);

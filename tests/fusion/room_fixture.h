@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
@@ -46,6 +47,12 @@ struct RoomFixture {
   double distanceToRoom(const Eigen::Vector3d& p) const {
     const Eigen::Vector3d a = (p - room_min).cwiseAbs(), b = (room_max - p).cwiseAbs();
     return std::min(a.minCoeff(), b.minCoeff());
+  }
+  // Mean of distanceToRoom over `points` (a mesh's vertices).
+  double meanDistanceToRoom(const std::vector<Eigen::Vector3d>& points) const {
+    double sum = 0;
+    for (const auto& p : points) sum += distanceToRoom(p);
+    return sum / points.size();
   }
   // Distance from the segment the sphere's centre travels; below the radius = inside the swept volume.
   double distanceToSweep(const Eigen::Vector3d& p) const {

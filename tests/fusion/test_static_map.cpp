@@ -265,9 +265,7 @@ TEST(StaticMap, ExportedFilesLoadInOpen3d) {
   ASSERT_TRUE(open3d::io::ReadTriangleMesh(mesh_path, mesh));
   EXPECT_GT(mesh.triangles_.size(), 1000u);
   EXPECT_TRUE(mesh.HasVertexColors());
-  double mesh_err = 0;
-  for (const auto& v : mesh.vertices_) mesh_err += room.distanceToRoom(v);
-  EXPECT_LT(mesh_err / mesh.vertices_.size(), 0.015);
+  EXPECT_LT(room.meanDistanceToRoom(mesh.vertices_), 0.015);
 
   open3d::geometry::PointCloud cloud;
   ASSERT_TRUE(open3d::io::ReadPointCloud(cloud_path, cloud));
@@ -287,9 +285,7 @@ TEST(StaticMap, MeshAtCentimetreVoxelsLiesOnTheRoomFacesTheCameraAndRepeats) {
   open3d::geometry::TriangleMesh mesh;
   ASSERT_TRUE(open3d::io::ReadTriangleMesh(path, mesh));
   ASSERT_GT(mesh.triangles_.size(), 10000u);
-  double err = 0;
-  for (const auto& v : mesh.vertices_) err += room.distanceToRoom(v);
-  EXPECT_LT(err / mesh.vertices_.size(), 0.003);  // exact data: the surfels' own error and the voxels'
+  EXPECT_LT(room.meanDistanceToRoom(mesh.vertices_), 0.003);  // exact data: the surfels' own error and the voxels'
   // Seen from inside, every wall's front faces the camera.
   const Eigen::Vector3d camera = room.pose(0).translation();
   size_t facing = 0;

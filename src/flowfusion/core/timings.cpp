@@ -120,6 +120,10 @@ void Timings::writeCsv(const std::string& path) const {
   writeFileAtomic(path, toCsv(), "timings file");
 }
 
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 StageTimer::StageTimer(Timings& timings, std::string stage)
     : timings_(timings), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
 
@@ -128,7 +132,7 @@ StageTimer::~StageTimer() { stop(); }
 double StageTimer::stop() {
   if (stopped_) return 0;
   stopped_ = true;
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+  const double ms = msSince(start_);
   timings_.add(stage_, ms);
   return ms;
 }

@@ -47,6 +47,9 @@ class Timings {
   std::vector<Row> rows_;
 };
 
+// Wall time in milliseconds since `start` (steady clock).
+double msSince(std::chrono::steady_clock::time_point start);
+
 // Scoped timer: adds the elapsed time to `timings` under `stage` when stopped or destroyed.
 class StageTimer {
  public:

@@ -5,6 +5,7 @@
 #include <opencv2/rgbd.hpp>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/timings.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/io/tum_sequence.h"
 
@@ -52,7 +53,7 @@ SE3 ReferenceOdometry::track(const RgbdFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
   // Rt maps points of the source (previous) frame into the destination (current) one.
   const bool ok = impl_->odometry->compute(impl_->previous, current, Rt);
-  call_ms_.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  call_ms_.push_back(msSince(start));
   if (ok) {
     Eigen::Matrix4d T_cur_prev;
     cv::cv2eigen(Rt, T_cur_prev);

@@ -185,6 +185,14 @@ FlowMotionSplit withRoles(const FlowCorrespondences& c, const CameraIntrinsics& 
   return split;
 }
 
+// The correspondences in `group`.
+std::vector<int> membersOf(const FlowMotionSplit& split, FlowMotionSplit::Group group) {
+  std::vector<int> members;
+  for (size_t k = 0; k < split.group.size(); ++k)
+    if (split.group[k] == group) members.push_back(static_cast<int>(k));
+  return members;
+}
+
 }  // namespace
 
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
@@ -196,39 +204,31 @@ int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camer
 
 FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
                                  const ConsensusConfig& config, const std::vector<SE3>& seeds) {
-  FlowMotionSplit split;
   // Fewer samples than this say nothing about which motions the view holds.
   constexpr size_t kMinSamples = 30;
-  if (c.size() < kMinSamples) return split;
+  if (c.size() < kMinSamples) return {};
   std::vector<SE3> motions = seeds;
   for (const SE3& T : drawHypotheses(c, camera, config.ransac_iterations, config.local_hypotheses))
     motions.push_back(T);
-  if (motions.size() < 2) return split;
+  if (motions.size() < 2) return {};
   std::vector<InlierBits> bits;
   for (const SE3& T : motions) bits.push_back(inlierBits(c, camera, T, config.inlier_px));
   const auto [i, j] = bestPair(bits);
   SE3 T_first = motions[i], T_second = motions[j];
-  const double r2 = config.inlier_px * config.inlier_px;
-  // Each sample goes to the motion that explains it better (within 2 inlier_px), each motion is
+  // Each sample goes to the motion that explains it better (withRoles' groups), each motion is
   // re-fitted on its samples.
-  const double assign_r2 = 4 * r2;
-  int n_first = 0, n_second = 0;
   constexpr int kRefinements = 3;
-  for (int round = 0; round <= kRefinements; ++round) {
-    std::vector<int> first, second;
-    for (size_t k = 0; k < c.size(); ++k) {
-      const double e1 = squaredError(c, k, camera, T_first), e2 = squaredError(c, k, camera, T_second);
-      if (std::min(e1, e2) <= assign_r2) (e1 <= e2 ? first : second).push_back(static_cast<int>(k));
-    }
-    n_first = static_cast<int>(first.size());
-    n_second = static_cast<int>(second.size());
-    if (round == kRefinements) break;
-    T_first = refineOn(c, first, camera, T_first);
-    T_second = refineOn(c, second, camera, T_second);
+  for (int round = 0; round < kRefinements; ++round) {
+    const FlowMotionSplit s = withRoles(c, camera, config, T_first, T_second);
+    T_first = refineOn(c, membersOf(s, FlowMotionSplit::kBackground), camera, T_first);
+    T_second = refineOn(c, membersOf(s, FlowMotionSplit::kMover), camera, T_second);
   }
   // The background's is the motion of the larger group.
-  if (n_second > n_first) std::swap(T_first, T_second);
-  return withRoles(c, camera, config, T_first, T_second);
+  const FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
+  const auto in_group = [&split](FlowMotionSplit::Group g) { return std::count(split.group.begin(), split.group.end(), g); };
+  if (in_group(FlowMotionSplit::kMover) > in_group(FlowMotionSplit::kBackground))
+    return withRoles(c, camera, config, T_second, T_first);
+  return split;
 }
 
 std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, const CameraIntrinsics& camera,

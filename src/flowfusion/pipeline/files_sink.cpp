@@ -6,6 +6,7 @@
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/timings.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/visualization/overlay.h"
 #include "flowfusion/visualization/map_preview.h"
@@ -51,7 +52,7 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
   map.exportMesh((out / "map.ply").string());
   map.exportPointCloud((out / "map_points.ply").string());
   writePreviews(map, (out / "preview").string());
-  summary.export_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  summary.export_ms = msSince(start);
   summary.written.push_back((out / "map.ply").string());
   summary.written.push_back((out / "map_points.ply").string());
   summary.written.push_back((out / "preview").string() + "/");

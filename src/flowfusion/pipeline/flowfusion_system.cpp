@@ -16,9 +16,6 @@ namespace {
 double depthTime(const RgbdFrame& f) { return std::isnan(f.depth_timestamp) ? f.timestamp : f.depth_timestamp; }
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 const SystemConfig& validated(const SystemConfig& config) {
   validate(config);

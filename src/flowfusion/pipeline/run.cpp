@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 
+#include "flowfusion/core/timings.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/io/prefetching_source.h"
 
@@ -40,7 +41,7 @@ namespace {
 std::optional<RgbdFrame> nextFrame(FrameSource& source, std::vector<double>& load_ms) {
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<RgbdFrame> frame = source.next();
-  load_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  load_ms.push_back(msSince(t0));
   return frame;
 }
 

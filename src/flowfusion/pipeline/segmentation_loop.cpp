@@ -62,9 +62,12 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
     split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus);
   }
   if (!split) return;
-  cv::Mat mover = moverScores(flow, in.cur, *split);
-  if (showsMover(*split, samples, config_.consensus)) estimate.flow_mover = mover;
-  if (!misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus)) return;
+  const bool shows_mover = showsMover(*split, samples, config_.consensus);
+  const bool misled = misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus);
+  if (!shows_mover && !misled) return;
+  const cv::Mat mover = moverScores(flow, in.cur, *split);
+  if (shows_mover) estimate.flow_mover = mover;
+  if (!misled) return;
   // The carried scores belong to the motion just rejected: the split's mover replaces them.
   StageTimer timer(timings, "odometry");
   const OdometryResult again = odometry_.estimate(in.cur, *in.target.odo, in.T_target_prev * split->T_b_a_background,
@@ -127,12 +130,12 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
                             std::numeric_limits<float>::quiet_NaN());
   }
   res.memory = memory_.recall(in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
-  DynamicScores scores;
   if (!estimate.flow_mover.empty()) {
     // The flow's own mover is a mover a priori; elsewhere the carried scores, if any.
     if (res.prior.empty()) res.prior = cv::Mat(estimate.flow_mover.size(), CV_32F, std::numeric_limits<float>::quiet_NaN());
     res.prior.setTo(1.f, estimate.flow_mover > 0);
   }
+  DynamicScores scores;
   for (int round = 0; round < opt.max_iterations; ++round) {
     {
       StageTimer timer(timings, "scores");

@@ -166,9 +166,9 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.prior, labels, "prior");
   checkResidual(residuals.memory, labels, "memory");
   const int n = graph.num_clusters;
-  if (static_cast<int>(graph.mean_depth.size()) != n)
-    throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths for " +
-                     std::to_string(n) + " clusters");
+  if (static_cast<int>(graph.mean_depth.size()) != n || static_cast<int>(graph.sizes.size()) != n)
+    throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths and " +
+                     std::to_string(graph.sizes.size()) + " sizes for " + std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
   constexpr int K = 7;
@@ -180,11 +180,8 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   std::vector<int> cnt(K * n, 0);
   const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F,   &residuals.r_M,
                               &residuals.a_M, &residuals.prior, &residuals.memory};
-  std::vector<double> pixels_of(n, 0.0);
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
-    for (int u = 0; u < labels.cols; ++u)
-      if (l[u] >= 0 && l[u] < n) ++pixels_of[l[u]];
     for (int k = 0; k < K; ++k) {
       if (terms[k]->empty()) continue;
       const float* r = terms[k]->ptr<float>(v);
@@ -232,9 +229,9 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   std::vector<double> group_pixels(n, 0.0);
   double pixels = 0;
   for (int c = 0; c < n; ++c) {
-    pixels += pixels_of[c];
+    pixels += graph.sizes[c];
     if (b[c] <= 0.5) continue;
-    group_pixels[root[c]] += pixels_of[c];
+    group_pixels[root[c]] += graph.sizes[c];
     if (delta[c] > config.model_motion_delta) moves[root[c]] = 1;
     if (mean(c, kMemory) >= 0.5) remembered[root[c]] = 1;
   }
