@@ -96,6 +96,50 @@ TEST(FlowMotion, TheMoverIsFoundAndACapturedOdometryIsTold) {
   EXPECT_TRUE(misledOdometry(c_still, scene.camera, *off, wrong, cfg));
 }
 
+// Per sample: on the map where frame A shows the wall, in front of it on the box (the map of a
+// scene whose box was seen moving).
+std::vector<MapRelation> wallOnMap(const FlowCorrespondences& c, const CameraIntrinsics& camera, const cv::Mat& box_mask) {
+  std::vector<MapRelation> relation;
+  for (const cv::Point3f& p : c.points_a) {
+    const Eigen::Vector2d uv = camera.project(Eigen::Vector3d(p.x, p.y, p.z));
+    const bool box = box_mask.at<unsigned char>(static_cast<int>(std::lround(uv.y())), static_cast<int>(std::lround(uv.x())));
+    relation.push_back(box ? MapRelation::kInFront : MapRelation::kOnMap);
+  }
+  return relation;
+}
+
+TEST(FlowMotion, AMoverFillingMostOfTheViewIsTheMoverWhenTheMapSaysSo) {
+  AnalyticScene scene = AnalyticScene::make(640, 480);
+  scene.box_half = Eigen::Vector3d(0.55, 0.42, 0.2);
+  scene.box_centre = Eigen::Vector3d(0.05, 0.05, 1.4);
+  const SE3 T_b_a = cameraMotion().inverse();
+  cv::Mat box_mask;
+  const FlowField flow = exactTwoMotionFlow(scene, cameraMotion(), boxMotion(), box_mask);
+  const FlowCorrespondences c =
+      sampleFlowCorrespondences(flow, scene.render(SE3::Identity()).frame.depth, scene.camera, 16);
+  ASSERT_GT(cv::countNonZero(box_mask), 0.52 * box_mask.total()) << "the box must fill most of the view";
+  const ConsensusConfig cfg;
+  // Without the map the larger group, the box, is taken for the background, and a correct
+  // odometry looks captured.
+  const auto by_size = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
+  ASSERT_TRUE(by_size);
+  EXPECT_LT(translationErrorM(by_size->T_b_a_background, T_b_a * boxMotion()), 1e-3);
+  EXPECT_TRUE(misledOdometry(c, scene.camera, *by_size, T_b_a, cfg));
+  // Samples on the map are no evidence of a capture.
+  const std::vector<MapRelation> relation = wallOnMap(c, scene.camera, box_mask);
+  EXPECT_FALSE(misledOdometry(c, scene.camera, *by_size, T_b_a, cfg, relation));
+  // With the map the wall is the background.
+  const auto by_map = splitFlowAgainst(c, scene.camera, T_b_a, cfg, relation);
+  ASSERT_TRUE(by_map);
+  EXPECT_LT(translationErrorM(by_map->T_b_a_background, T_b_a), 1e-3);
+  EXPECT_LT(translationErrorM(by_map->T_b_a_mover, T_b_a * boxMotion()), 1e-3);
+  EXPECT_FALSE(misledOdometry(c, scene.camera, *by_map, T_b_a, cfg, relation));
+  // A map that knows nothing there does not decide.
+  const std::vector<MapRelation> unknown(c.size(), MapRelation::kUnknown);
+  EXPECT_LT(translationErrorM(splitFlowMotions(c, scene.camera, cfg, {}, unknown).T_b_a_background, T_b_a * boxMotion()),
+            1e-3);
+}
+
 TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
   const AnalyticScene scene = bigBoxScene();
   const SE3 T_world_b = cameraMotion();
@@ -141,6 +185,9 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.grid_step = 0;
+  EXPECT_THROW(validate(bad), InputError);
+  bad = ConsensusConfig{};
+  bad.map_role_margin = 0;
   EXPECT_THROW(validate(bad), InputError);
 }
 

@@ -22,6 +22,8 @@ void validate(const ConsensusConfig& c) {
     throw InputError("consensus.min_mover_share must be in (0, 1)");
   if (!(c.min_captured > 0 && c.min_captured <= 1)) throw InputError("consensus.min_captured must be in (0, 1]");
   if (!(c.min_gain >= 0 && c.min_gain <= 1)) throw InputError("consensus.min_gain must be in [0, 1]");
+  if (!(c.map_role_margin > 0 && c.map_role_margin <= 1))
+    throw InputError("consensus.map_role_margin must be in (0, 1]");
 }
 
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
@@ -193,6 +195,28 @@ std::vector<int> membersOf(const FlowMotionSplit& split, FlowMotionSplit::Group 
   return members;
 }
 
+// Whether the map relations make the mover group of `split` the background: its points lay in
+// front of the map clearly less often than the background group's. Groups with map relations for
+// fewer than a third of their points (or kMinKnown) do not decide.
+bool mapSwapsRoles(const FlowMotionSplit& split, const std::vector<MapRelation>& relation, double margin) {
+  if (relation.size() != split.group.size()) return false;
+  constexpr int kMinKnown = 10;
+  int count[2] = {0, 0}, known[2] = {0, 0}, front[2] = {0, 0};
+  for (size_t k = 0; k < split.group.size(); ++k) {
+    const int g = split.group[k];
+    if (g == FlowMotionSplit::kNeither) continue;
+    ++count[g];
+    known[g] += relation[k] != MapRelation::kUnknown;
+    front[g] += relation[k] == MapRelation::kInFront;
+  }
+  double front_share[2];
+  for (int g = 0; g < 2; ++g) {
+    if (known[g] < kMinKnown || 3 * known[g] < count[g]) return false;
+    front_share[g] = static_cast<double>(front[g]) / known[g];
+  }
+  return front_share[FlowMotionSplit::kBackground] - front_share[FlowMotionSplit::kMover] >= margin;
+}
+
 }  // namespace
 
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
@@ -203,7 +227,8 @@ int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camer
 }
 
 FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                                 const ConsensusConfig& config, const std::vector<SE3>& seeds) {
+                                 const ConsensusConfig& config, const std::vector<SE3>& seeds,
+                                 const std::vector<MapRelation>& relation) {
   // Fewer samples than this say nothing about which motions the view holds.
   constexpr size_t kMinSamples = 30;
   if (c.size() < kMinSamples) return {};
@@ -223,19 +248,22 @@ FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntri
     T_first = refineOn(c, membersOf(s, FlowMotionSplit::kBackground), camera, T_first);
     T_second = refineOn(c, membersOf(s, FlowMotionSplit::kMover), camera, T_second);
   }
-  // The background's is the motion of the larger group.
-  const FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
+  // The background's is the motion of the larger group, unless the map says otherwise.
+  FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
   const auto in_group = [&split](FlowMotionSplit::Group g) { return std::count(split.group.begin(), split.group.end(), g); };
   if (in_group(FlowMotionSplit::kMover) > in_group(FlowMotionSplit::kBackground))
-    return withRoles(c, camera, config, T_second, T_first);
+    split = withRoles(c, camera, config, T_second, T_first);
+  if (mapSwapsRoles(split, relation, config.map_role_margin))
+    split = withRoles(c, camera, config, split.T_b_a_mover, split.T_b_a_background);
   return split;
 }
 
 std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                                                const SE3& T_b_a_odometry, const ConsensusConfig& config) {
+                                                const SE3& T_b_a_odometry, const ConsensusConfig& config,
+                                                const std::vector<MapRelation>& relation) {
   const double off_odometry = static_cast<double>(c.size()) - countFlowInliers(c, camera, T_b_a_odometry, config.inlier_px);
   if (off_odometry < config.min_mover_share * static_cast<double>(c.size())) return std::nullopt;
-  FlowMotionSplit split = splitFlowMotions(c, camera, config, {T_b_a_odometry});
+  FlowMotionSplit split = splitFlowMotions(c, camera, config, {T_b_a_odometry}, relation);
   if (!split.ok) return std::nullopt;
   return split;
 }
@@ -245,16 +273,21 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
 }
 
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,
-                    const SE3& T_b_a_odometry, const ConsensusConfig& config) {
+                    const SE3& T_b_a_odometry, const ConsensusConfig& config, const std::vector<MapRelation>& relation) {
   const double loose_px = 2 * config.inlier_px;
   const double n = static_cast<double>(c.size());
   if (countFlowInliers(c, camera, split.T_b_a_background, loose_px) >=
       countFlowInliers(c, camera, T_b_a_odometry, loose_px) + config.min_gain * n)
     return true;
   if (!showsMover(split, c, config)) return false;
-  int captured = 0;
-  for (const int k : split.mover_only) captured += explains(c, k, camera, T_b_a_odometry, loose_px * loose_px);
-  return captured >= config.min_captured * static_cast<double>(split.mover_only.size());
+  // Samples on the static map are no evidence of a capture: an odometry that explains them is right.
+  int captured = 0, evidence = 0;
+  for (const int k : split.mover_only) {
+    if (!relation.empty() && relation[k] == MapRelation::kOnMap) continue;
+    ++evidence;
+    captured += explains(c, k, camera, T_b_a_odometry, loose_px * loose_px);
+  }
+  return evidence > 0 && captured >= config.min_captured * static_cast<double>(evidence);
 }
 
 }  // namespace ff

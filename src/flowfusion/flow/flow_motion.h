@@ -42,9 +42,14 @@ struct ConsensusConfig {
   // Or restart when the background's motion explains at least this share of the samples more
   // than the odometry's, within 2 inlier_px (an odometry plainly wrong, mover or not).
   double min_gain = 0.3;
+  // The larger group is the mover's when the share of its points that lay in front of the static
+  // map in frame B exceeds the other group's by this (a mover filling most of the view); else the
+  // larger group is the background.
+  double map_role_margin = 0.5;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
-                                                local_hypotheses, min_mover_share, min_captured, min_gain)
+                                                local_hypotheses, min_mover_share, min_captured, min_gain,
+                                                map_role_margin)
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -60,12 +65,16 @@ struct FlowCorrespondences {
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
                                               const CameraIntrinsics& camera, int step);
 
+// Where a correspondence's point lay in frame B against the static map (rendered at B's pose): on
+// its surface, in front of it (something not in the map: a mover), or unknown (no map there).
+enum class MapRelation : unsigned char { kUnknown, kOnMap, kInFront };
+
 // Correspondences T_b_a explains within `inlier_px`, the reprojection error in B.
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
                      double inlier_px);
 
-// Two motions that together explain the flow: the background's (the larger group, taken as the
-// camera's) and a mover's. Per correspondence, `group` says which explains it (kNeither when
+// Two motions that together explain the flow: the background's (taken as the camera's: the larger
+// group, unless the map relations say its points lay in front of the map) and a mover's. Per correspondence, `group` says which explains it (kNeither when
 // neither does within 2 inlier_px).
 struct FlowMotionSplit {
   enum Group : unsigned char { kBackground = 0, kMover = 1, kNeither = 2 };
@@ -82,22 +91,27 @@ struct FlowMotionSplit {
 // with one motion of the two alone within inlier_px (a far background that a correct and a
 // slightly wrong camera motion both explain does not make them a pair), then refined by
 // alternately assigning each correspondence to the motion that explains it better and re-fitting
-// both (Levenberg-Marquardt). Deterministic.
+// both (Levenberg-Marquardt). `relation` (one per correspondence, or empty) decides the roles as
+// ConsensusConfig::map_role_margin says. Deterministic.
 FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                                 const ConsensusConfig& config, const std::vector<SE3>& seeds = {});
+                                 const ConsensusConfig& config, const std::vector<SE3>& seeds = {},
+                                 const std::vector<MapRelation>& relation = {});
 
 // The split of the sampled flow, seeded with the odometry's motion; none when that motion explains
 // all but min_mover_share of the samples within inlier_px (nothing else to find).
 std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                                                const SE3& T_b_a_odometry, const ConsensusConfig& config);
+                                                const SE3& T_b_a_odometry, const ConsensusConfig& config,
+                                                const std::vector<MapRelation>& relation = {});
 
 // Whether the split shows a mover: at least min_mover_share of the samples are the mover's own.
 bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, const ConsensusConfig& config);
 
 // Whether the odometry's motion T_b_a_odometry is to restart from the split's background motion:
-// it explains the mover's own flow (min_captured: it followed the mover, wholly or part way), or
-// the background's motion explains at least min_gain of the samples more within 2 inlier_px.
+// it explains the mover's own flow (min_captured of the mover's own samples not on the static map,
+// as `relation` says: it followed the mover, wholly or part way), or the background's motion
+// explains at least min_gain of the samples more within 2 inlier_px.
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,
-                    const SE3& T_b_a_odometry, const ConsensusConfig& config);
+                    const SE3& T_b_a_odometry, const ConsensusConfig& config,
+                    const std::vector<MapRelation>& relation = {});
 
 }  // namespace ff

@@ -1,8 +1,9 @@
 #include "flowfusion/pipeline/segmentation_loop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
+#include <utility>
 
 #include "flowfusion/flow/flow_motion.h"
 #include "flowfusion/flow/flow_residual.h"
@@ -47,23 +48,27 @@ FlowField SegmentationLoop::computeFlow(const RgbdFrame& cur, const RgbdFrame& p
 
 void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
                            Timings& timings) {
-  if (config_.consensus.enabled) restartFromFlow(in, flow, estimate, timings);
+  // The static map's depth rendered for the previous frame; none when that frame was not scored.
+  const cv::Mat previous_background = std::exchange(background_, cv::Mat());
+  if (config_.consensus.enabled) restartFromFlow(in, flow, previous_background, estimate, timings);
   if (estimate.odometry.ok) scoreRounds(in, flow, estimate, timings);
 }
 
-void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
-                                       Timings& timings) {
+void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow,
+                                       const cv::Mat& previous_background, MotionEstimate& estimate, Timings& timings) {
   std::optional<FlowMotionSplit> split;
   FlowCorrespondences samples;
+  std::vector<MapRelation> relation;
   const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
   {
     StageTimer timer(timings, "consensus");
     samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step);
-    split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus);
+    relation = mapRelations(in.previous.frame.depth, previous_background, samples);
+    split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus, relation);
   }
   if (!split) return;
   const bool shows_mover = showsMover(*split, samples, config_.consensus);
-  const bool misled = misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus);
+  const bool misled = misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus, relation);
   if (!shows_mover && !misled) return;
   const cv::Mat mover = moverScores(flow, in.cur, *split);
   if (shows_mover) estimate.flow_mover = mover;
@@ -79,6 +84,29 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   estimate.restarted_from_flow = true;
 }
 
+std::vector<MapRelation> SegmentationLoop::mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
+                                                        const FlowCorrespondences& samples) const {
+  if (previous_background.empty()) return {};
+  // The previous frame's depth where the flow lands, against the map's stable surfaces there.
+  const double to_level = std::ldexp(1.0, -config_.pipeline.segmentation_level);
+  std::vector<MapRelation> relation(samples.size(), MapRelation::kUnknown);
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const cv::Point2f& b = samples.pixels_b[k];
+    const int u = std::clamp(static_cast<int>(std::lround(b.x)), 0, previous_depth.cols - 1);
+    const int v = std::clamp(static_cast<int>(std::lround(b.y)), 0, previous_depth.rows - 1);
+    const int ul = std::min(static_cast<int>(b.x * to_level), previous_background.cols - 1);
+    const int vl = std::min(static_cast<int>(b.y * to_level), previous_background.rows - 1);
+    const float d = previous_depth.at<float>(v, u), m = previous_background.at<float>(vl, ul);
+    if (!(d > 0) || !(m > 0)) continue;
+    const double margin = config_.scores.model_margin * m;
+    if (std::abs(d - m) <= margin)
+      relation[k] = MapRelation::kOnMap;
+    else if (d < m - margin)
+      relation[k] = MapRelation::kInFront;
+  }
+  return relation;
+}
+
 cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const {
   // 1 where the mover's motion explains the flow and the background's does not.
   const double off_px = 2 * config_.consensus.inlier_px;
@@ -90,23 +118,22 @@ cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame
   return scores;
 }
 
-std::pair<cv::Mat, cv::Mat> SegmentationLoop::mapEvidence(const SegmentationInput& in, const SE3& T_world_cur,
-                                                          const RgbdFrame& seg_frame, Timings& timings) const {
+SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationInput& in, const SE3& T_world_cur,
+                                                           const RgbdFrame& seg_frame, Timings& timings) const {
   const ScoreConfig& s = config_.scores;
-  cv::Mat r_M, a_M;
-  if (!in.map || in.map->size() == 0 || (s.alpha_M <= 0 && s.model_agreement <= 0)) return {r_M, a_M};
+  MapEvidence e;
+  if (!in.map || in.map->size() == 0 || (s.alpha_M <= 0 && s.model_agreement <= 0)) return e;
   StageTimer timer(timings, "prediction");
   // What lies in front of the static map is not background, what coincides with it is. The
   // surfels' intensity only serves the agreement.
   const bool agreement = s.model_agreement > 0;
   cv::Mat background_intensity;
-  const cv::Mat background =
-      in.map->predictStableDepth(T_world_cur, seg_camera_, agreement ? &background_intensity : nullptr);
-  if (s.alpha_M > 0) r_M = modelOcclusion(seg_frame.depth, background, s.model_margin);
+  e.background = in.map->predictStableDepth(T_world_cur, seg_camera_, agreement ? &background_intensity : nullptr);
+  if (s.alpha_M > 0) e.r_M = modelOcclusion(seg_frame.depth, e.background, s.model_margin);
   if (agreement)
-    a_M = modelAgreement(seg_frame.depth, background, s.agreement_margin, seg_frame.intensity, background_intensity,
-                         s.agreement_intensity);
-  return {r_M, a_M};
+    e.a_M = modelAgreement(seg_frame.depth, e.background, s.agreement_margin, seg_frame.intensity, background_intensity,
+                           s.agreement_intensity);
+  return e;
 }
 
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
@@ -123,7 +150,10 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     graph = clusterer_->cluster(seg_frame, seg_camera_);
   }
   ResidualImages res;
-  std::tie(res.r_M, res.a_M) = mapEvidence(in, in.target.T_world_target * estimate.T_target_cur, seg_frame, timings);
+  MapEvidence evidence = mapEvidence(in, in.target.T_world_target * estimate.T_target_cur, seg_frame, timings);
+  res.r_M = evidence.r_M;
+  res.a_M = evidence.a_M;
+  background_ = evidence.background;
   if (config_.scores.temporal_prior > 0 && !in.previous.scores.empty() && !estimate.restarted_from_flow) {
     const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
     res.prior = carryScores(in.previous.scores, in.previous.depthAt(level), seg_camera_, T_prev_cur.inverse(),

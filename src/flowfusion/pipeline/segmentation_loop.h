@@ -52,13 +52,21 @@ class SegmentationLoop {
  private:
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image.
   cv::Mat flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
-  void restartFromFlow(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+  // Where the samples' points lay in the previous frame (its depth) against the static map's depth
+  // rendered for it (segmentation level; empty: no relations).
+  std::vector<MapRelation> mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
+                                        const FlowCorrespondences& samples) const;
+  void restartFromFlow(const SegmentationInput& in, const FlowField& flow, const cv::Mat& previous_background,
+                       MotionEstimate& estimate, Timings& timings);
   // 1 where the split's mover motion explains the flow and its background motion does not (CV_32F
   // at the segmentation level).
   cv::Mat moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const;
-  // The static map's occlusion r_M and agreement a_M at the current estimate (empty when off).
-  std::pair<cv::Mat, cv::Mat> mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
-                                          Timings& timings) const;
+  // The static map's depth at the current estimate, its occlusion r_M and agreement a_M (empty when off).
+  struct MapEvidence {
+    cv::Mat background, r_M, a_M;
+  };
+  MapEvidence mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
+                          Timings& timings) const;
   void scoreRounds(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
 
   SystemConfig config_;
@@ -68,6 +76,7 @@ class SegmentationLoop {
   DenseOdometry refine_odometry_;  // the rounds' re-estimates (refine_iterations per level)
   std::unique_ptr<OpticalFlow> flow_;
   std::unique_ptr<Clusterer> clusterer_;
+  cv::Mat background_;  // the static map's depth rendered for the last scored frame (mapEvidence)
   MotionMemory memory_;  // where objects moved, for the scores' model term (scores.model_memory_s)
 };
 
