@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
@@ -171,6 +172,67 @@ TEST(FilesSink, ARunTooShortForAMeshSucceedsAndSaysSo) {
   EXPECT_NE(s.notes[0].find("no map written"), std::string::npos);
   const nlohmann::json summary = readJsonFile((tmp.path() / "out" / "summary.json").string());
   EXPECT_EQ(summary["notes"].size(), 1u);
+}
+
+// Replaces the output's masks/ folder by a file once the files sink has begun, so every mask
+// write fails.
+struct BreakMasksSink : ResultSink {
+  fs::path masks;
+  void begin(const RunInfo&) override {
+    fs::remove_all(masks);
+    std::ofstream(masks) << "not a folder";
+  }
+};
+
+// One frame: the failure can only surface in end(); six: in a later frame() or in end().
+TEST(FilesSink, AFailedMaskWriteFailsTheRunWithAMarkedPartialResult) {
+  for (const int frames : {1, 6}) {
+    testing::TempDir tmp;
+    SynthSource source(frames);
+    FilesSinkOptions options;
+    options.out_dir = (tmp.path() / "out").string();
+    FilesSink sink(options);
+    BreakMasksSink breaker;
+    breaker.masks = tmp.path() / "out" / "masks";
+    try {
+      runSequence(source, SystemConfig{}, {&sink, &breaker});
+      ADD_FAILURE() << frames << " frames: a failed mask write must fail the run";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot write mask"), std::string::npos) << e.what();
+    }
+    const nlohmann::json summary = readJsonFile((tmp.path() / "out" / "summary.json").string());
+    EXPECT_FALSE(summary["complete"].get<bool>()) << frames;
+    EXPECT_NE(summary["stop_reason"].get<std::string>().find("cannot write mask"), std::string::npos) << frames;
+    EXPECT_TRUE(fs::is_regular_file(tmp.path() / "out" / "trajectory.txt")) << frames;
+    EXPECT_FALSE(fs::exists(tmp.path() / "out" / "map.ply")) << frames;
+  }
+}
+
+TEST(FilesSink, AStoppedRunHasTheMaskOfEveryFrameItProcessed) {
+  testing::TempDir tmp;
+  SynthSource source(8);
+  std::atomic<bool> stop{false};
+  const char* reason = "interrupted (test)";
+  FilesSinkOptions options;
+  options.out_dir = (tmp.path() / "out").string();
+  FilesSink sink(options);
+  ResultsSink results;
+  ProbeSink probe;
+  probe.stop = &stop;
+  probe.stop_after = 5;
+  const RunSummary s = runSequence(source, SystemConfig{}, {&sink, &results, &probe}, {&stop, &reason});
+  EXPECT_FALSE(s.complete);
+  ASSERT_EQ(results.results.size(), 5u);
+  for (const FrameResult& r : results.results) {
+    const fs::path png = tmp.path() / "out" / "masks" / (timestampName(r.timestamp) + ".png");
+    const cv::Mat mask = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(mask.empty()) << png;
+    EXPECT_EQ(cv::norm(mask, r.dynamic_mask, cv::NORM_INF), 0) << png;
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(tmp.path() / "out" / "masks"), fs::directory_iterator{}), 5);
+  const nlohmann::json summary = readJsonFile((tmp.path() / "out" / "summary.json").string());
+  EXPECT_FALSE(summary["complete"].get<bool>());
+  EXPECT_EQ(summary["stop_reason"].get<std::string>(), "interrupted (test)");
 }
 
 }  // namespace

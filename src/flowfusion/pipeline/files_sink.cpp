@@ -1,7 +1,14 @@
 #include "flowfusion/pipeline/files_sink.h"
 
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <filesystem>
+#include <functional>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
 
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/config.h"
@@ -15,9 +22,93 @@ namespace fs = std::filesystem;
 
 namespace ff {
 
+namespace {
+constexpr size_t kWaitingImages = 4;  // images queued for the writer at most (2 to 4 frames)
+}  // namespace
+
+// Runs write jobs on one thread in the order given, at most `depth` waiting. After a job fails the
+// ones after it are dropped, and every later push() and finish() rethrows the failure.
+class FilesSink::ImageWriter {
+ public:
+  explicit ImageWriter(size_t depth) : depth_(depth), worker_([this] { work(); }) {}
+  ~ImageWriter() { stop(); }
+
+  // Waits while `depth` jobs are waiting.
+  void push(std::function<void()> job) {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [this] { return error_ || stopping_ || jobs_.size() < depth_; });
+    if (error_) std::rethrow_exception(error_);
+    if (stopping_) throw std::logic_error("FilesSink: frame() after end()");
+    jobs_.push_back(std::move(job));
+    changed_.notify_all();
+  }
+
+  // Waits until every job ran or one failed, and stops the thread.
+  void finish() {
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [this] { return error_ || (jobs_.empty() && !busy_); });
+    }
+    stop();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_all();
+    if (worker_.joinable()) worker_.join();
+  }
+
+  void work() {
+    for (;;) {
+      std::function<void()> job;
+      {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+        if (stopping_) return;
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+        busy_ = true;
+      }
+      changed_.notify_all();
+      std::exception_ptr error;
+      try {
+        job();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      {
+        std::lock_guard lock(mutex_);
+        busy_ = false;
+        if (error) {
+          error_ = error;
+          jobs_.clear();
+        }
+      }
+      changed_.notify_all();
+      if (error) return;
+    }
+  }
+
+  const size_t depth_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<std::function<void()>> jobs_;
+  std::exception_ptr error_;  // the first failed job's
+  bool busy_ = false;         // a job is running
+  bool stopping_ = false;
+  std::thread worker_;  // last: starts once the members above exist
+};
+
 FilesSink::FilesSink(FilesSinkOptions options) : options_(std::move(options)) {
   if (options_.out_dir.empty()) throw InputError("the output folder name is empty");
 }
+
+FilesSink::~FilesSink() = default;
 
 void FilesSink::begin(const RunInfo& info) {
   source_ = info.frames;
@@ -27,15 +118,40 @@ void FilesSink::begin(const RunInfo& info) {
   writeJsonFile((out / "config.json").string(), nlohmann::json(info.config));
   if (options_.write_masks) fs::create_directories(out / "masks");
   if (options_.write_overlays) fs::create_directories(out / "overlays");
+  if (options_.write_masks || options_.write_overlays) writer_ = std::make_unique<ImageWriter>(kWaitingImages);
 }
 
 void FilesSink::frame(const RgbdFrame& frame, const FrameResult& result) {
+  if (!writer_) return;
   const fs::path out(options_.out_dir);
   const std::string stem = timestampName(frame.timestamp) + ".png";
-  const auto raw = [&](const cv::Mat& m) { return source_ ? source_->toRawPixels(m) : m; };
-  if (options_.write_masks) writePngAtomic((out / "masks" / stem).string(), raw(result.dynamic_mask), "mask");
+  const auto raw = [source = source_](const cv::Mat& m) { return source ? source->toRawPixels(m) : m; };
+  // Copies: the caller may change its images once frame() returns.
+  const cv::Mat mask = result.dynamic_mask.clone();
+  if (options_.write_masks)
+    writer_->push([path = (out / "masks" / stem).string(), mask, raw] { writePngAtomic(path, raw(mask), "mask"); });
   if (options_.write_overlays)
-    writePngAtomic((out / "overlays" / stem).string(), raw(overlayMask(frame.color, result.dynamic_mask)), "overlay");
+    writer_->push([path = (out / "overlays" / stem).string(), color = frame.color.clone(), mask, raw] {
+      writePngAtomic(path, raw(overlayMask(color, mask)), "overlay");
+    });
+}
+
+// Waits for the images still queued. A failed write makes the run incomplete (or, when it already
+// is, adds a note); its error is returned for end() to rethrow once the other files are written.
+std::exception_ptr FilesSink::finishImages(RunSummary& summary) {
+  if (!writer_) return nullptr;
+  try {
+    writer_->finish();
+  } catch (const std::exception& e) {
+    if (summary.complete) {
+      summary.complete = false;
+      summary.stop_reason = e.what();
+    } else if (summary.stop_reason != e.what()) {
+      summary.notes.push_back(std::string("writing an image failed: ") + e.what());
+    }
+    return std::current_exception();
+  }
+  return nullptr;
 }
 
 void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
@@ -59,6 +175,7 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
 }
 
 void FilesSink::end(RunSummary& summary, const FlowFusionSystem& system) {
+  const std::exception_ptr image_error = finishImages(summary);
   const fs::path out(options_.out_dir);
   writeTrajectory((out / "trajectory.txt").string(), summary.trajectory);
   summary.timings.writeCsv((out / "timings.csv").string());
@@ -68,6 +185,7 @@ void FilesSink::end(RunSummary& summary, const FlowFusionSystem& system) {
   if (options_.write_overlays) summary.written.push_back((out / "overlays").string() + "/");
   if (const StaticMap* map = system.map(); map && options_.export_map) exportMap(summary, *map);
   writeSummary(summary);
+  if (image_error) std::rethrow_exception(image_error);
 }
 
 void FilesSink::writeSummary(RunSummary& summary) const {

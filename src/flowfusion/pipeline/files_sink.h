@@ -3,6 +3,15 @@
 // leaves): config.json at the start, masks/ and overlays/ per frame, then trajectory.txt,
 // timings.csv, the map (map.ply, map_points.ply, preview/) and summary.json. Every file is
 // written atomically; summary.json says whether the run is complete and, if not, why.
+//
+// The masks and overlays are encoded and written on one writer thread, so the PNG encoding does
+// not hold up the run (as the read-ahead hides the decoding). At most a few frames wait for it
+// (frame() blocks while they do, so memory stays bounded); a failed write is thrown by the next
+// frame() or by end(), which first writes every image still waiting and then the rest of the run's
+// files, with summary.json saying the run is incomplete and why. The source's toRawPixels() is
+// called on that thread (const members of every source in io/ allow that).
+#include <exception>
+#include <memory>
 #include <string>
 
 #include "flowfusion/pipeline/result_sink.h"
@@ -20,6 +29,11 @@ struct FilesSinkOptions {
 class FilesSink : public ResultSink {
  public:
   explicit FilesSink(FilesSinkOptions options);
+  // Without end(): stops the writer thread after the image it is writing (the others are dropped).
+  ~FilesSink() override;
+  FilesSink(const FilesSink&) = delete;
+  FilesSink& operator=(const FilesSink&) = delete;
+
   void begin(const RunInfo& info) override;
   void frame(const RgbdFrame& frame, const FrameResult& result) override;
   void end(RunSummary& summary, const FlowFusionSystem& system) override;
@@ -27,12 +41,16 @@ class FilesSink : public ResultSink {
   const std::string& outDir() const { return options_.out_dir; }
 
  private:
+  class ImageWriter;
+
+  std::exception_ptr finishImages(RunSummary& summary);
   void exportMap(RunSummary& summary, const StaticMap& map) const;
   void writeSummary(RunSummary& summary) const;
 
   FilesSinkOptions options_;
   const FrameSource* source_ = nullptr;
   std::string source_name_;
+  std::unique_ptr<ImageWriter> writer_;
 };
 
 }  // namespace ff
