@@ -68,11 +68,6 @@ inline float bilinearDepth(const cv::Mat& d, int x0, int y0, float ax, float ay)
   return (1 - ay) * ((1 - ax) * a + ax * b) + ay * ((1 - ax) * c + ax * e);
 }
 
-inline float depthSigma(float z, const OdometryConfig& c) {
-  const float dz = z - 0.4f;
-  return static_cast<float>(c.depth_sigma_a + c.depth_sigma_b * dz * dz);
-}
-
 // log(1 + q) for q >= 0 to about 1e-4 relative: the robust cost only decides whether a step
 // lowered the cost, and std::log1p took a quarter of the odometry's time.
 inline float fastLog1p(float q) {
@@ -88,6 +83,61 @@ inline float fastLog1p(float q) {
   return 0.69314718f * e + 2.0f * s * (1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7))));
 }
 
+constexpr int kLanes = 8;  // partial sums per dot product: whole SIMD registers, so the loops vectorise
+
+// sum_t a[t] b[t] over n (a multiple of kLanes) terms, in kLanes partial sums (a fixed order).
+inline float lanesDot(const float* a, const float* b, int n) {
+  std::array<float, kLanes> s{};
+  for (int t = 0; t < n; t += kLanes)
+    for (int l = 0; l < kLanes; ++l) s[l] += a[t + l] * b[t + l];
+  return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
+}
+
+// The Gauss-Newton terms of one image row, kept column by column (Jacobian J0..J5, residual r,
+// pixel weight v, normalised squared residual q), so that the IRLS weights, the Cauchy cost and
+// the normal equations are computed in loops the compiler vectorises, instead of 27 scalar updates
+// per term.
+class RowTerms {
+ public:
+  explicit RowTerms(int max_terms) {
+    for (auto& col : cols_) col.assign((max_terms + kLanes - 1) / kLanes * kLanes, 0.0f);
+  }
+  void add(const float J[6], float r, float v, float q) {
+    for (int k = 0; k < 6; ++k) cols_[k][n_] = J[k];
+    cols_[kR][n_] = r;
+    cols_[kV][n_] = v;
+    cols_[kQ][n_] = q;
+    ++n_;
+  }
+  // Adds the upper triangle of J^T W J (21, row by row) and J^T W r (6) with the Cauchy weights
+  // w = v / (1 + q), summed in float, to H and g, and returns sum v log(1 + q); starts the next row.
+  float sumInto(std::array<double, 21>& H, std::array<double, 6>& g) {
+    const int n = (n_ + kLanes - 1) / kLanes * kLanes;
+    for (auto& col : cols_) std::fill(col.begin() + n_, col.begin() + n, 0.0f);
+    const float* v = cols_[kV].data();
+    const float* q = cols_[kQ].data();
+    float* w = cols_[kW].data();
+    float* wJ = cols_[kWJ].data();
+    for (int t = 0; t < n; ++t) wJ[t] = fastLog1p(q[t]);
+    const float cost = lanesDot(v, wJ, n);
+    for (int t = 0; t < n; ++t) w[t] = v[t] / (1 + q[t]);
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      const float* Ji = cols_[i].data();
+      for (int t = 0; t < n; ++t) wJ[t] = w[t] * Ji[t];
+      for (int j = i; j < 6; ++j) H[k++] += lanesDot(wJ, cols_[j].data(), n);
+      g[i] += lanesDot(wJ, cols_[kR].data(), n);
+    }
+    n_ = 0;
+    return cost;
+  }
+
+ private:
+  static constexpr int kR = 6, kV = 7, kQ = 8, kW = 9, kWJ = 10;  // columns after J0..J5; kWJ: scratch
+  std::array<std::vector<float>, 11> cols_;
+  int n_ = 0;
+};
+
 // Normal equations (upper triangle of J^T W J, J^T W r), cost and count. Terms are summed in
 // float within one image row and carried over in double, which keeps the inner loop cheap
 // without losing precision over hundreds of thousands of pixels.
@@ -96,26 +146,7 @@ struct Accumulator {
   std::array<double, 6> g{};
   double cost = 0;
   int count = 0;
-  std::array<float, 21> Hr{};
-  std::array<float, 6> gr{};
-  float cost_r = 0;
 
-  void add(const float J[6], float r, float w) {
-    int k = 0;
-    for (int i = 0; i < 6; ++i) {
-      const float wj = w * J[i];
-      gr[i] += wj * r;
-      for (int j = i; j < 6; ++j) Hr[k++] += wj * J[j];
-    }
-  }
-  void flushRow() {
-    for (int i = 0; i < 21; ++i) H[i] += Hr[i];
-    for (int i = 0; i < 6; ++i) g[i] += gr[i];
-    cost += cost_r;
-    Hr.fill(0);
-    gr.fill(0);
-    cost_r = 0;
-  }
   void merge(const Accumulator& o) {
     for (int i = 0; i < 21; ++i) H[i] += o.H[i];
     for (int i = 0; i < 6; ++i) g[i] += o.g[i];
@@ -134,6 +165,7 @@ struct Accumulator {
 // Where a reference pixel lands in the current frame, and the values found there.
 struct Warp {
   float qx, qy, qz;  // point in the current camera frame, m
+  float iz;          // 1 / qz
   float u, v;        // pixel in the current frame
   int x0, y0;
   float ax, ay;
@@ -145,8 +177,9 @@ inline bool warpPixel(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const 
   w.qy = R(1, 0) * px + R(1, 1) * py + R(1, 2) * pz + t.y();
   w.qz = R(2, 0) * px + R(2, 1) * py + R(2, 2) * pz + t.z();
   if (w.qz < min_depth) return false;
-  w.u = static_cast<float>(cam.fx) * w.qx / w.qz + static_cast<float>(cam.cx);
-  w.v = static_cast<float>(cam.fy) * w.qy / w.qz + static_cast<float>(cam.cy);
+  w.iz = 1.0f / w.qz;
+  w.u = static_cast<float>(cam.fx) * w.qx * w.iz + static_cast<float>(cam.cx);
+  w.v = static_cast<float>(cam.fy) * w.qy * w.iz + static_cast<float>(cam.cy);
   if (!(w.u >= 0 && w.v >= 0 && w.u < cam.width - 1 && w.v < cam.height - 1)) return false;
   w.x0 = static_cast<int>(w.u);
   w.y0 = static_cast<int>(w.v);
@@ -175,83 +208,111 @@ inline float targetWeight(const cv::Mat& weight, const Warp& w) {
 // `ratio` of its depth: the point is hidden there.
 inline bool hiddenInTarget(float zB, float qz, float ratio) { return ratio > 0 && zB > 0 && zB < qz * (1.0f - ratio); }
 
+// d(image value at the warped pixel)/d(xi) for a left perturbation q' = q + dv + dw x q, from the
+// image's gradient (gx, gy) per pixel: the chain rule through the projection, written out.
+inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy, float J[6]) {
+  const float ga = gx * fx, gb = gy * fy;
+  const float X = w.qx * w.iz, Y = w.qy * w.iz;
+  J[0] = ga * w.iz;
+  J[1] = gb * w.iz;
+  J[2] = -(ga * X + gb * Y) * w.iz;
+  J[3] = -(ga * X * Y + gb * (1 + Y * Y));
+  J[4] = ga * (1 + X * X) + gb * X * Y;
+  J[5] = gb * X - ga * Y;
+}
+
+// One level's settings and images, in the float form the per-pixel loop uses.
+struct LevelTerms {
+  const PyramidLevel& A;
+  const PyramidLevel& B;
+  const cv::Mat& wimg;
+  const cv::Mat& wB;
+  Eigen::Matrix3f R;
+  Eigen::Vector3f t;
+  float fx, fy, inv_fx, inv_fy, cx, cy;
+  float inv_c2, half_c2, sI;  // Cauchy 1 / c^2 and c^2 / 2; alpha_I / sigma_I
+  float sigma_a, sigma_b, slope_sigma;
+  float zmin, zmax, occlusion;
+  bool use_intensity, use_depth;
+
+  LevelTerms(const PyramidLevel& A_, const PyramidLevel& B_, const cv::Mat& wimg_, const cv::Mat& wB_, const SE3& T,
+             const OdometryConfig& c)
+      : A(A_), B(B_), wimg(wimg_), wB(wB_), R(T.rotation().cast<float>()), t(T.translation().cast<float>()),
+        fx(static_cast<float>(A_.camera.fx)), fy(static_cast<float>(A_.camera.fy)), inv_fx(1.0f / fx),
+        inv_fy(1.0f / fy), cx(static_cast<float>(A_.camera.cx)), cy(static_cast<float>(A_.camera.cy)),
+        inv_c2(static_cast<float>(1.0 / (c.cauchy_c * c.cauchy_c))),
+        half_c2(static_cast<float>(0.5 * c.cauchy_c * c.cauchy_c)),
+        sI(static_cast<float>(c.alpha_I / c.sigma_I)), sigma_a(static_cast<float>(c.depth_sigma_a)),
+        sigma_b(static_cast<float>(c.depth_sigma_b)), slope_sigma(static_cast<float>(c.depth_slope_sigma)),
+        zmin(static_cast<float>(c.min_depth)), zmax(static_cast<float>(c.max_depth)),
+        occlusion(static_cast<float>(c.occlusion_ratio)), use_intensity(c.use_intensity), use_depth(c.use_depth) {}
+
+  float depthSigma(float z) const {
+    const float dz = z - 0.4f;
+    return sigma_a + sigma_b * dz * dz;
+  }
+
+  // The terms of row y: intensity and depth of every source pixel that warps into the target.
+  void row(int y, RowTerms& terms, Accumulator& a) const {
+    const float* dA = A.depth.ptr<float>(y);
+    const float* iA = A.intensity.ptr<float>(y);
+    const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
+    const float ny = (y - cy) * inv_fy;
+    for (int x = 1; x < A.depth.cols - 1; ++x) {
+      const float z = dA[x];
+      if (!(z >= zmin && z <= zmax)) continue;
+      float v_pix = wr ? wr[x] : 1.0f;
+      if (v_pix <= 0) continue;
+      Warp w;
+      if (!warpPixel(R, t, A.camera, (x - cx) * inv_fx * z, ny * z, z, zmin, w)) continue;
+      v_pix *= targetWeight(wB, w);
+      if (v_pix <= 0) continue;
+      const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+      if (hiddenInTarget(zB, w.qz, occlusion)) continue;
+      bool used = false;
+      float J[6];
+      if (use_intensity) {
+        const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
+        imageJacobian(bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI, bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI,
+                      w, fx, fy, J);
+        terms.add(J, r, v_pix, r * r * inv_c2);
+        used = true;
+      }
+      if (use_depth && zB > 0) {
+        const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
+        const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
+        const float sA = depthSigma(w.qz), sB = depthSigma(zB);
+        const float inv_s = 1.0f / (std::sqrt(sA * sA + sB * sB) + std::sqrt(gx * gx + gy * gy) * slope_sigma);
+        const float r = (zB - w.qz) * inv_s;
+        imageJacobian(gx, gy, w, fx, fy, J);
+        // minus d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
+        J[2] -= 1;
+        J[3] -= w.qy;
+        J[4] += w.qx;
+        for (float& j : J) j *= inv_s;
+        terms.add(J, r, v_pix, r * r * inv_c2);
+        used = true;
+      }
+      if (used) ++a.count;
+    }
+    a.cost += half_c2 * terms.sumInto(a.H, a.g);
+  }
+};
+
 constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
 
 // The normal equations of one Gauss-Newton iteration at one level under T (target <- source),
 // summed over fixed row stripes so that the result does not depend on the thread count.
 Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
                             const SE3& T, const OdometryConfig& c) {
-  const CameraIntrinsics& cam = A.camera;
-  const float cI = static_cast<float>(c.cauchy_c), inv_c2 = 1.0f / (cI * cI);
-  const float sI = static_cast<float>(c.alpha_I / c.sigma_I);
-  const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
-  const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
-  const float slope_sigma = static_cast<float>(c.depth_slope_sigma);
-  const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
-  const float occlusion = static_cast<float>(c.occlusion_ratio);
-  const Eigen::Matrix3f R = T.rotation().cast<float>();
-  const Eigen::Vector3f t = T.translation().cast<float>();
+  const LevelTerms level(A, B, wimg, wB, T, c);
   std::array<Accumulator, kStripes> acc{};
   const int rows = A.depth.rows;
   cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+    RowTerms terms(2 * A.depth.cols);
     for (int s = range.start; s < range.end; ++s) {
-      Accumulator& a = acc[s];
       const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
-      for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) {
-        const float* dA = A.depth.ptr<float>(y);
-        const float* iA = A.intensity.ptr<float>(y);
-        const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
-        for (int x = 1; x < A.depth.cols - 1; ++x) {
-          const float z = dA[x];
-          if (!(z >= zmin && z <= zmax)) continue;
-          float v_pix = wr ? wr[x] : 1.0f;
-          if (v_pix <= 0) continue;
-          const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
-          Warp w;
-          if (!warpPixel(R, t, cam, px, py, z, zmin, w)) continue;
-          v_pix *= targetWeight(wB, w);
-          if (v_pix <= 0) continue;
-          const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
-          if (hiddenInTarget(zB, w.qz, occlusion)) continue;
-          // d(pixel)/d(xi) for a left perturbation q' = q + dv + dw x q.
-          const float iz = 1.0f / w.qz, iz2 = iz * iz;
-          const float Ju[6] = {fx * iz, 0, -fx * w.qx * iz2, -fx * w.qx * w.qy * iz2,
-                               fx * (1 + w.qx * w.qx * iz2), -fx * w.qy * iz};
-          const float Jv[6] = {0, fy * iz, -fy * w.qy * iz2, -fy * (1 + w.qy * w.qy * iz2),
-                               fy * w.qx * w.qy * iz2, fy * w.qx * iz};
-          bool used = false;
-          if (c.use_intensity) {
-            const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
-            const float gx = bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI;
-            const float gy = bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI;
-            float J[6];
-            for (int k = 0; k < 6; ++k) J[k] = gx * Ju[k] + gy * Jv[k];
-            const float q = r * r * inv_c2;
-            a.add(J, r, v_pix / (1 + q));
-            a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
-            used = true;
-          }
-          if (c.use_depth && zB > 0) {
-            const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
-            const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
-            const float slope = std::sqrt(gx * gx + gy * gy);
-            const float sA = depthSigma(w.qz, c), sB = depthSigma(zB, c);
-            const float sigma = std::sqrt(sA * sA + sB * sB) + slope * slope_sigma;
-            const float inv_s = 1.0f / sigma;
-            const float r = (zB - w.qz) * inv_s;
-            // d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
-            const float Jz[6] = {0, 0, 1, w.qy, -w.qx, 0};
-            float J[6];
-            for (int k = 0; k < 6; ++k) J[k] = (gx * Ju[k] + gy * Jv[k] - Jz[k]) * inv_s;
-            const float q = r * r * inv_c2;
-            a.add(J, r, v_pix / (1 + q));
-            a.cost_r += v_pix * 0.5f * cI * cI * fastLog1p(q);
-            used = true;
-          }
-          if (used) ++a.count;
-        }
-        a.flushRow();
-      }
+      for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) level.row(y, terms, acc[s]);
     }
   });
   Accumulator total;
