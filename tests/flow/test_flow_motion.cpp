@@ -77,6 +77,7 @@ TEST(FlowMotion, TheMoverIsFoundAndACapturedOdometryIsTold) {
   const auto split = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
   ASSERT_TRUE(split);
   EXPECT_TRUE(showsMover(*split, c, cfg));
+  EXPECT_TRUE(showsMoverGroup(*split, cfg));
   EXPECT_LT(translationErrorM(split->T_b_a_background, T_b_a), 1e-3);
   EXPECT_FALSE(misledOdometry(c, scene.camera, *split, T_b_a, cfg));
   // One that followed the box: the same split, and a capture.

@@ -272,6 +272,12 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
   return static_cast<double>(split.mover_only.size()) >= config.min_mover_share * static_cast<double>(c.size());
 }
 
+bool showsMoverGroup(const FlowMotionSplit& split, const ConsensusConfig& config) {
+  const auto in_mover = std::count(split.group.begin(), split.group.end(), FlowMotionSplit::kMover);
+  return !split.group.empty() &&
+         static_cast<double>(in_mover) >= config.min_mover_share * static_cast<double>(split.group.size());
+}
+
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,
                     const SE3& T_b_a_odometry, const ConsensusConfig& config, const std::vector<MapRelation>& relation) {
   const double loose_px = 2 * config.inlier_px;

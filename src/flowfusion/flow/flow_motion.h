@@ -106,6 +106,11 @@ std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, co
 // Whether the split shows a mover: at least min_mover_share of the samples are the mover's own.
 bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, const ConsensusConfig& config);
 
+// Whether the split's mover group (the samples its motion explains better) holds at least
+// min_mover_share of the samples: at the start, before any scores, the best guess of the movers,
+// even where their motion is too close to the background's for samples of their own.
+bool showsMoverGroup(const FlowMotionSplit& split, const ConsensusConfig& config);
+
 // Whether the odometry's motion T_b_a_odometry is to restart from the split's background motion:
 // it explains the mover's own flow (min_captured of the mover's own samples not on the static map,
 // as `relation` says: it followed the mover, wholly or part way), or the background's motion

@@ -56,6 +56,10 @@ void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, M
 
 void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow,
                                        const cv::Mat& previous_background, MotionEstimate& estimate, Timings& timings) {
+  // Nothing is known of the movers yet (the first frame pair, or after a frame left unscored): the
+  // odometry had no weights to keep a mover out, so the flow is split whatever the odometry
+  // explains, and the split's mover group is taken for the movers.
+  const bool start = in.previous.scores.empty();
   std::optional<FlowMotionSplit> split;
   FlowCorrespondences samples;
   std::vector<MapRelation> relation;
@@ -64,14 +68,21 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
     StageTimer timer(timings, "consensus");
     samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step);
     relation = mapRelations(in.previous.frame.depth, previous_background, samples);
-    split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus, relation);
+    if (!start) {
+      split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus, relation);
+    } else if (FlowMotionSplit s = splitFlowMotions(samples, camera_, config_.consensus, {T_prev_cur}, relation); s.ok) {
+      split = std::move(s);
+    }
   }
   if (!split) return;
-  const bool shows_mover = showsMover(*split, samples, config_.consensus);
-  const bool misled = misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus, relation);
+  const bool start_movers = start && showsMoverGroup(*split, config_.consensus);
+  const bool shows_mover = start_movers || showsMover(*split, samples, config_.consensus);
+  const bool misled = start_movers || misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus, relation);
   if (!shows_mover && !misled) return;
-  const cv::Mat mover = moverScores(flow, in.cur, *split);
+  const cv::Mat mover =
+      moverScores(flow, in.cur, *split, start_movers ? MoverRule::kBetterExplained : MoverRule::kOwn);
   if (shows_mover) estimate.flow_mover = mover;
+  estimate.flow_mover_holds = start_movers;
   if (!misled) return;
   // The carried scores belong to the motion just rejected: the split's mover replaces them.
   StageTimer timer(timings, "odometry");
@@ -107,12 +118,13 @@ std::vector<MapRelation> SegmentationLoop::mapRelations(const cv::Mat& previous_
   return relation;
 }
 
-cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const {
-  // 1 where the mover's motion explains the flow and the background's does not.
-  const double off_px = 2 * config_.consensus.inlier_px;
+cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split,
+                                      MoverRule rule) const {
+  const bool own = rule == MoverRule::kOwn;
+  const double off_px = (own ? 2 : 1) * config_.consensus.inlier_px;
   const cv::Mat r_background = flowResidualAt(flow, cur, split.T_b_a_background);
   const cv::Mat r_mover = flowResidualAt(flow, cur, split.T_b_a_mover);
-  const cv::Mat mover = (r_background > off_px) & (r_mover < 0.5 * r_background);
+  const cv::Mat mover = (r_background > off_px) & (r_mover < (own ? 0.5 : 1.0) * r_background);
   cv::Mat scores;
   mover.convertTo(scores, CV_32F, 1.0 / 255);
   return scores;
@@ -176,6 +188,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_F = flowResidualAt(flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
+      if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);
     }
     StageTimer timer(timings, "odometry");
     const OdometryResult again =

@@ -26,6 +26,7 @@ struct MotionEstimate {
   SE3 T_target_cur;          // current-camera points into the target camera
   cv::Mat scores;            // b per pixel at the segmentation level; empty when none
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
+  bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
   bool restarted_from_flow = false;
   int rounds = 0;            // score <-> odometry rounds run
 };
@@ -58,9 +59,13 @@ class SegmentationLoop {
                                         const FlowCorrespondences& samples) const;
   void restartFromFlow(const SegmentationInput& in, const FlowField& flow, const cv::Mat& previous_background,
                        MotionEstimate& estimate, Timings& timings);
-  // 1 where the split's mover motion explains the flow and its background motion does not (CV_32F
-  // at the segmentation level).
-  cv::Mat moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split) const;
+  // Which pixels are the split's mover: its own (the background's motion leaves them beyond
+  // 2 inlier_px, the mover's explains them within half of that), or, at the start, those the
+  // background's motion leaves beyond inlier_px and the mover's explains better.
+  enum class MoverRule { kOwn, kBetterExplained };
+  // 1 on the split's mover, 0 elsewhere (CV_32F at the segmentation level).
+  cv::Mat moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split,
+                      MoverRule rule) const;
   // The static map's depth at the current estimate, its occlusion r_M and agreement a_M (empty when off).
   struct MapEvidence {
     cv::Mat background, r_M, a_M;
