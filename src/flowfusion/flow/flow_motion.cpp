@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <opencv2/calib3d.hpp>
@@ -187,6 +188,11 @@ FlowMotionSplit withRoles(const FlowCorrespondences& c, const CameraIntrinsics& 
   return split;
 }
 
+// How many correspondences are in `group`.
+std::ptrdiff_t groupSize(const FlowMotionSplit& split, FlowMotionSplit::Group group) {
+  return std::count(split.group.begin(), split.group.end(), group);
+}
+
 // The correspondences in `group`.
 std::vector<int> membersOf(const FlowMotionSplit& split, FlowMotionSplit::Group group) {
   std::vector<int> members;
@@ -250,8 +256,7 @@ FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntri
   }
   // The background's is the motion of the larger group, unless the map says otherwise.
   FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
-  const auto in_group = [&split](FlowMotionSplit::Group g) { return std::count(split.group.begin(), split.group.end(), g); };
-  if (in_group(FlowMotionSplit::kMover) > in_group(FlowMotionSplit::kBackground))
+  if (groupSize(split, FlowMotionSplit::kMover) > groupSize(split, FlowMotionSplit::kBackground))
     split = withRoles(c, camera, config, T_second, T_first);
   if (mapSwapsRoles(split, relation, config.map_role_margin))
     split = withRoles(c, camera, config, split.T_b_a_mover, split.T_b_a_background);
@@ -273,9 +278,8 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
 }
 
 bool showsMoverGroup(const FlowMotionSplit& split, const ConsensusConfig& config) {
-  const auto in_mover = std::count(split.group.begin(), split.group.end(), FlowMotionSplit::kMover);
-  return !split.group.empty() &&
-         static_cast<double>(in_mover) >= config.min_mover_share * static_cast<double>(split.group.size());
+  return !split.group.empty() && static_cast<double>(groupSize(split, FlowMotionSplit::kMover)) >=
+                                     config.min_mover_share * static_cast<double>(split.group.size());
 }
 
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,

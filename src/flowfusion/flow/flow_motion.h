@@ -74,8 +74,8 @@ int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camer
                      double inlier_px);
 
 // Two motions that together explain the flow: the background's (taken as the camera's: the larger
-// group, unless the map relations say its points lay in front of the map) and a mover's. Per correspondence, `group` says which explains it (kNeither when
-// neither does within 2 inlier_px).
+// group, unless the map relations say its points lay in front of the map) and a mover's. Per
+// correspondence, `group` says which explains it (kNeither when neither does within 2 inlier_px).
 struct FlowMotionSplit {
   enum Group : unsigned char { kBackground = 0, kMover = 1, kNeither = 2 };
   bool ok = false;  // false: too few correspondences or no pair found
