@@ -1,19 +1,25 @@
 // Micro-benchmarks of optical flow, flow residuals, clustering and the score solve, with
 // accuracy counters measured on the analytic test scene (tests/flow/analytic_scene.h), whose
 // true flow is known: static pixels move by egoFlow() of the true depth and motion.
-//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score'
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score|P3P|Ap3p'
 //     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one command line)
 // Counters: epe_px = mean end-point error over static, unoccluded pixels that stay in view;
 // straddle = fraction of clusters with >= 10 % of their pixels on each side of the moving
 // box's outline; leak = fraction of box pixels in clusters that are < 90 % box.
 #include <benchmark/benchmark.h>
 
+#include <Eigen/Core>
+#include <array>
 #include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <random>
+#include <vector>
 
 #include "../tests/flow/analytic_scene.h"
 #include "flowfusion/flow/flow_residual.h"
 #include "flowfusion/flow/optical_flow.h"
+#include "flowfusion/flow/p3p.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/dynamic_score.h"
 
@@ -160,5 +166,62 @@ void BM_ScoreSolve(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(ff::solveScoreEnergy(delta, edges, 0.1, 0.25, 1.0).data());
 }
 BENCHMARK(BM_ScoreSolve)->Arg(96)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+// The flow split's minimal hypotheses: 256 four-correspondence draws of a hand-held-like motion
+// (points at 0.5-5 m over the image, 0.5 px of pixel noise), solved in turn; time per draw.
+struct FourPointDraw {
+  std::array<Eigen::Vector3d, 4> points_a;
+  std::array<Eigen::Vector2d, 4> pixels_b;
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+};
+
+std::vector<FourPointDraw> fourPointDraws(const ff::CameraIntrinsics& cam) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(0.5, 5);
+  std::normal_distribution<double> noise(0, 0.5);
+  ff::Vector6d xi;
+  xi << 0.012, -0.006, 0.01, 0.012, -0.018, 0.006;
+  const ff::SE3 T_b_a = ff::expSE3(xi);
+  std::vector<FourPointDraw> draws(256);
+  for (FourPointDraw& d : draws)
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d px(u(rng), v(rng));
+      // Float coordinates, as FlowCorrespondences holds them.
+      const Eigen::Vector3f p = (T_b_a.inverse() * cam.backproject(px.x(), px.y(), z(rng))).cast<float>();
+      const Eigen::Vector2f q = (px + Eigen::Vector2d(noise(rng), noise(rng))).cast<float>();
+      d.points_a[k] = p.cast<double>();
+      d.pixels_b[k] = q.cast<double>();
+      d.object.emplace_back(p.x(), p.y(), p.z());
+      d.image.emplace_back(q.x(), q.y());
+    }
+  return draws;
+}
+
+void BM_P3PChoosingByFourth(benchmark::State& state) {
+  const ff::CameraIntrinsics cam = *ff::freiburgPreset(1);
+  const std::vector<FourPointDraw> draws = fourPointDraws(cam);
+  size_t i = 0;
+  for (auto _ : state) {
+    const FourPointDraw& d = draws[i++ % draws.size()];
+    benchmark::DoNotOptimize(ff::solveP3PChoosingByFourth(d.points_a, d.pixels_b, cam));
+  }
+}
+BENCHMARK(BM_P3PChoosingByFourth)->Unit(benchmark::kMicrosecond);
+
+// What the split called before: cv::solvePnP(SOLVEPNP_AP3P) on the same draws (as float points).
+void BM_SolvePnPAp3p(benchmark::State& state) {
+  const ff::CameraIntrinsics cam = *ff::freiburgPreset(1);
+  const std::vector<FourPointDraw> draws = fourPointDraws(cam);
+  cv::Mat K;
+  cv::eigen2cv(cam.K(), K);
+  size_t i = 0;
+  for (auto _ : state) {
+    const FourPointDraw& d = draws[i++ % draws.size()];
+    cv::Mat rvec, tvec;
+    benchmark::DoNotOptimize(cv::solvePnP(d.object, d.image, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_AP3P));
+  }
+}
+BENCHMARK(BM_SolvePnPAp3p)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
