@@ -1,6 +1,7 @@
 #include "flowfusion/flow/flow_motion.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstddef>
@@ -11,6 +12,7 @@
 #include <random>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/flow/p3p.h"
 
 namespace ff {
 
@@ -116,13 +118,12 @@ SE3 refineOn(const FlowCorrespondences& c, const std::vector<int>& subset, const
   return fromRvecTvec(rvec, tvec);
 }
 
-// Motions from four correspondences each (AP3P): `global` drawn anywhere, `local` within one image
-// neighbourhood (a fifth of the image width).
+// Motions from four correspondences each (P3P on three, the fourth choosing; p3p.h): `global`
+// drawn anywhere, `local` within one image neighbourhood (a fifth of the image width).
 std::vector<SE3> drawHypotheses(const FlowCorrespondences& c, const CameraIntrinsics& camera, int global, int local) {
   std::mt19937 rng(20201);  // fixed: the same flow gives the same split
   std::uniform_int_distribution<size_t> pick(0, c.size() - 1);
   const double radius2 = std::pow(camera.width / 5.0, 2);
-  const cv::Mat K = cameraMatrix(camera);
   std::vector<SE3> out;
   for (int h = 0; h < global + local; ++h) {
     std::vector<size_t> idx{pick(rng)};
@@ -136,10 +137,14 @@ std::vector<SE3> drawHypotheses(const FlowCorrespondences& c, const CameraIntrin
       idx.push_back(j);
     }
     if (idx.size() < 4) continue;
-    const FlowCorrespondences s = subsetOf(c, idx);
-    cv::Mat rvec, tvec;
-    if (cv::solvePnP(s.points_a, s.pixels_b, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_AP3P))
-      out.push_back(fromRvecTvec(rvec, tvec));
+    std::array<Eigen::Vector3d, 4> points;
+    std::array<Eigen::Vector2d, 4> pixels;
+    for (size_t k = 0; k < 4; ++k) {
+      const cv::Point3f& p = c.points_a[idx[k]];
+      points[k] = Eigen::Vector3d(p.x, p.y, p.z);
+      pixels[k] = Eigen::Vector2d(c.pixels_b[idx[k]].x, c.pixels_b[idx[k]].y);
+    }
+    if (const std::optional<SE3> T_b_a = solveP3PChoosingByFourth(points, pixels, camera)) out.push_back(*T_b_a);
   }
   return out;
 }
