@@ -160,12 +160,22 @@ InlierBits inlierBits(const FlowCorrespondences& c, const CameraIntrinsics& came
 
 // The indices (i, j) of the two motions that explain the most correspondences one of them alone:
 // a far background both a correct and a slightly wrong camera motion explain does not make a pair
-// of them look like two motions.
+// of them look like two motions. A pair explains at most its two inlier counts together: pairs
+// that cannot beat the best so far are not counted (the same pair as counting all).
 std::pair<int, int> bestPair(const std::vector<InlierBits>& bits) {
+  std::vector<int> inliers;
+  for (const InlierBits& b : bits) {
+    int n = 0;
+    for (const std::uint64_t w : b) n += std::popcount(w);
+    inliers.push_back(n);
+  }
+  const int most = *std::max_element(inliers.begin(), inliers.end());
   std::pair<int, int> best{-1, -1};
   int best_cover = -1;
-  for (size_t i = 0; i < bits.size(); ++i)
+  for (size_t i = 0; i < bits.size(); ++i) {
+    if (inliers[i] + most <= best_cover) continue;
     for (size_t j = i + 1; j < bits.size(); ++j) {
+      if (inliers[i] + inliers[j] <= best_cover) continue;
       int cover = 0;
       for (size_t w = 0; w < bits[i].size(); ++w) cover += std::popcount(bits[i][w] ^ bits[j][w]);
       if (cover > best_cover) {
@@ -173,6 +183,7 @@ std::pair<int, int> bestPair(const std::vector<InlierBits>& bits) {
         best = {static_cast<int>(i), static_cast<int>(j)};
       }
     }
+  }
   return best;
 }
 
