@@ -69,6 +69,38 @@ TEST_F(TrackingTargetsTest, AKeyframeStaysUntilTheCameraMovesFarEnough) {
             targets.previous()->odo.level(1).intensity.data);
 }
 
+TEST_F(TrackingTargetsTest, TheFirstScoredFrameReplacesAKeyframeWithoutScores) {
+  // The first frame has no scores: its moving objects would pull every frame aligned to it. All
+  // frames here stand at the first pose, so only the scores make a keyframe; each frame's target
+  // weights hold its index, which tells the keyframe.
+  const SE3 T = scene_->cameraPose(0);
+  auto frame = [&](int i, bool with_scores) {
+    TrackedFrame f = tracked(i, T);
+    f.target_weights = cv::Mat(60, 80, CV_32F, cv::Scalar(static_cast<float>(i)));
+    if (with_scores) f.scores = cv::Mat(60, 80, CV_32F, cv::Scalar(0.f));
+    return f;
+  };
+  auto keyframe = [&](const TrackingTargets& t) { return t.choose(nullptr, timings_).weights->at<float>(0, 0); };
+  PipelineOptions p;
+  p.model_keyframes = false;
+  TrackingTargets targets(p, odometry_, scene_->camera());
+  targets.advance(frame(0, false), true, {}, nullptr, timings_);
+  targets.advance(frame(1, true), true, {}, nullptr, timings_);
+  EXPECT_EQ(keyframe(targets), 1.f);
+  // A scored keyframe stays while the camera is near it.
+  targets.advance(frame(2, true), true, {}, nullptr, timings_);
+  EXPECT_EQ(keyframe(targets), 1.f);
+  // Without segmentation no frame has scores, and the first frame stays the keyframe.
+  TrackingTargets plain(p, odometry_, scene_->camera());
+  for (int i = 0; i < 3; ++i) plain.advance(frame(i, false), true, {}, nullptr, timings_);
+  EXPECT_EQ(keyframe(plain), 0.f);
+  // With model keyframes the map is rendered for the first scored frame.
+  TrackingTargets with_model(PipelineOptions{}, odometry_, scene_->camera());
+  with_model.advance(frame(0, false), true, {}, nullptr, timings_);
+  EXPECT_TRUE(with_model.rendersOnAdvance(T, true, true));
+  EXPECT_FALSE(with_model.rendersOnAdvance(T, true, false));
+}
+
 TEST_F(TrackingTargetsTest, TargetsCarryTheirStaticWeights) {
   PipelineOptions p;
   p.model_keyframes = false;

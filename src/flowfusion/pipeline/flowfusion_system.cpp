@@ -79,7 +79,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.scores = scores;
   startFusion(frame, result.T_world_cam, full_scores);
   // A new model keyframe is the map rendered at this frame's pose, this frame's fusion included.
-  if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok)) finishFusion();
+  if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok, !scores.empty())) finishFusion();
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);

@@ -46,21 +46,21 @@ std::optional<OdometryFrame> TrackingTargets::modelTarget(const TrackedFrame& so
   return prepareOdometryFrame(frame.intensity, depth, camera_, odometry_);
 }
 
-bool TrackingTargets::needsKeyframe(const SE3& T_world_cam, bool tracking_ok) const {
-  if (!keyframe_ || !tracking_ok) return true;
+bool TrackingTargets::needsKeyframe(const SE3& T_world_cam, bool tracking_ok, bool scored) const {
+  if (!keyframe_ || !tracking_ok || (scored && keyframe_->scores.empty())) return true;
   const SE3 T_kf_cur = keyframe_->T_world_cam.inverse() * T_world_cam;
   return translationNorm(T_kf_cur) > options_.keyframe_translation ||
          rotationAngleDeg(T_kf_cur) > options_.keyframe_rotation_deg;
 }
 
-bool TrackingTargets::rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok) const {
+bool TrackingTargets::rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok, bool scored) const {
   return options_.tracking == TrackingMode::FrameToKeyframe && options_.model_keyframes &&
-         needsKeyframe(T_world_cam, tracking_ok);
+         needsKeyframe(T_world_cam, tracking_ok, scored);
 }
 
 void TrackingTargets::advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask,
                               const StaticMap* map, Timings& timings) {
-  if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok)) {
+  if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok, !frame.scores.empty())) {
     keyframe_ = std::make_unique<TrackedFrame>(frame);
     if (options_.model_keyframes && map && map->size() > 0) {
       StageTimer timer(timings, "prediction");

@@ -50,13 +50,15 @@ class TrackingTargets {
   // The previous frame as a target: the fallback when a rendered target fails.
   TrackingTarget previousFrame() const;
   // Keeps `frame` as the previous frame and, when the policy says so, as the keyframe. A frame
-  // whose tracking failed always becomes a keyframe. `dynamic_mask` (input size) marks the pixels
+  // whose tracking failed always becomes a keyframe, and so does the first scored frame after a
+  // keyframe without scores (the first frame): that keyframe's moving objects carry full weight
+  // and pull every frame aligned to it. `dynamic_mask` (input size) marks the pixels
   // that keep the frame's depth in a model keyframe.
   void advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask, const StaticMap* map,
                Timings& timings);
-  // Whether advance() with this pose and status may render the map (a new model keyframe), so the
-  // map must be complete up to that frame first.
-  bool rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok) const;
+  // Whether advance() with this pose, status and scores (`scored`: the frame has dynamic scores)
+  // may render the map (a new model keyframe), so the map must be complete up to that frame first.
+  bool rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok, bool scored) const;
 
  private:
   // The map's depth predicted at `source`'s pose with its image as the photometric target (its
@@ -64,7 +66,7 @@ class TrackingTargets {
   // less than model_min_valid_fraction of its depth pixels at the odometry's finest level.
   std::optional<OdometryFrame> modelTarget(const TrackedFrame& source, const StaticMap& map,
                                            const cv::Mat& keep = {}) const;
-  bool needsKeyframe(const SE3& T_world_cam, bool tracking_ok) const;
+  bool needsKeyframe(const SE3& T_world_cam, bool tracking_ok, bool scored) const;
 
   PipelineOptions options_;
   OdometryConfig odometry_;
