@@ -60,7 +60,8 @@ bool TrackingTargets::rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok,
 
 void TrackingTargets::advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask,
                               const StaticMap* map, Timings& timings) {
-  if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok, !frame.scores.empty())) {
+  const bool scored = !frame.scores.empty();
+  if (options_.tracking == TrackingMode::FrameToKeyframe && needsKeyframe(frame.T_world_cam, tracking_ok, scored)) {
     keyframe_ = std::make_unique<TrackedFrame>(frame);
     if (options_.model_keyframes && map && map->size() > 0) {
       StageTimer timer(timings, "prediction");
