@@ -23,11 +23,10 @@ struct ScoreConfig {
   // Weight of the smoothness term E_G (Eq. 15); 1 = the paper (docs/tuning.md#lambda_g).
   double lambda_G = 1.0;
   // Factor on lambda_G for the edges between clusters whose mean depths differ by at most
-  // body_depth_ratio of the nearer one (our extension; 1 = the paper, off): the parts of one body
-  // (a stance leg, a head beside a moving torso) follow each other more than a body follows the
-  // background it stands in front of. Off by default until measured with the flow split of the
-  // consensus (docs/tuning.md#body_smoothing).
-  double body_smoothing = 1.0;
+  // body_depth_ratio of the nearer one (our extension; 1 = the paper): the parts of one body (a
+  // stance leg, a head beside a moving torso) follow each other more than a body follows the
+  // background it stands in front of (docs/tuning.md#body_smoothing).
+  double body_smoothing = 2.0;
   double body_depth_ratio = 0.1;  // fraction of the depth
   // Weight of the static-model occlusion term added to Eq. 10 (our extension; 0 = the paper): how
   // far the cluster lies in front of the static map, metres over D_i (docs/tuning.md#alpha_m).
