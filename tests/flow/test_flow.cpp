@@ -108,6 +108,10 @@ TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
   const cv::Mat r = flowResidual(of, e);
   EXPECT_TRUE(std::isnan(r.at<float>(20, 20)));
   EXPECT_NEAR(r.at<float>(30, 30), 0.f, 1e-6);
+  // The ego flow is 2 px to the right: the last two columns were out of view in B.
+  EXPECT_NEAR(r.at<float>(30, 76), 0.f, 1e-6);
+  EXPECT_TRUE(std::isnan(r.at<float>(30, 78)));
+  EXPECT_TRUE(std::isnan(r.at<float>(30, 79)));
 
   // Half resolution: the full-resolution flow is resampled and rescaled to level-1 pixels.
   const cv::Mat e1 = egoFlow(downsampleDepth(depth), cam.atLevel(1), T_b_a);

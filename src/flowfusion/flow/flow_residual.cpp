@@ -48,12 +48,19 @@ cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
   if (ego_flow.empty() || ego_flow.type() != CV_32FC2) throw InputError("flowResidual: ego flow is not CV_32FC2");
   const FlowField of = resizeFlow(flow, ego_flow.size());
   cv::Mat r(ego_flow.size(), CV_32FC1);
+  const float max_u = static_cast<float>(r.cols - 1), max_v = static_cast<float>(r.rows - 1);
   for (int v = 0; v < r.rows; ++v) {
     const auto* a = of.uv.ptr<cv::Vec2f>(v);
     const auto* e = ego_flow.ptr<cv::Vec2f>(v);
     float* o = r.ptr<float>(v);
-    // NaN propagates through the arithmetic, which is what marks invalid pixels.
-    for (int u = 0; u < r.cols; ++u) o[u] = std::hypot(a[u][0] - e[u][0], a[u][1] - e[u][1]);
+    // NaN propagates through the arithmetic, which is what marks invalid pixels. A pixel the ego
+    // flow takes outside the image was not in view in the other frame: its optical flow matched
+    // something else (content entering at the border), so it has no residual.
+    for (int u = 0; u < r.cols; ++u) {
+      const float tu = static_cast<float>(u) + e[u][0], tv = static_cast<float>(v) + e[u][1];
+      const bool in_view = tu >= 0.f && tu <= max_u && tv >= 0.f && tv <= max_v;
+      o[u] = in_view ? std::hypot(a[u][0] - e[u][0], a[u][1] - e[u][1]) : std::numeric_limits<float>::quiet_NaN();
+    }
   }
   return r;
 }

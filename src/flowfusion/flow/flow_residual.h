@@ -16,7 +16,8 @@ namespace ff {
 // the camera's size must match depth_a's.
 cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE3& T_cam_b_cam_a);
 
-// Flow residual r_F = |dx_of - dx_e| (Eq. 9), CV_32F in pixels, NaN where either is invalid.
+// Flow residual r_F = |dx_of - dx_e| (Eq. 9), CV_32F in pixels, NaN where either is invalid or
+// the ego flow leaves the image (the pixel was out of view in the other frame).
 // If the sizes differ, the optical flow is resampled to the ego flow's size (resizeFlow), so
 // a coarse ego flow gives a coarse residual in that level's pixels.
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
