@@ -7,8 +7,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <random>
 
 #include "flowfusion/core/error.h"
@@ -67,55 +65,60 @@ bool explains(const FlowCorrespondences& c, size_t i, const CameraIntrinsics& ca
   return squaredError(c, i, camera, T_b_a) < r2;
 }
 
-SE3 fromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d R_e;
-  Eigen::Vector3d t_e;
-  cv::cv2eigen(R, R_e);
-  cv::cv2eigen(tvec, t_e);
-  SE3 T = SE3::Identity();
-  T.linear() = R_e;
-  T.translation() = t_e;
-  return orthonormalized(T);
-}
-
-void toRvecTvec(const SE3& T, cv::Mat& rvec, cv::Mat& tvec) {
-  cv::Mat R;
-  const Eigen::Matrix3d R_e = T.linear();
-  const Eigen::Vector3d t_e = T.translation();
-  cv::eigen2cv(R_e, R);
-  cv::Rodrigues(R, rvec);
-  cv::eigen2cv(t_e, tvec);
-}
-
-cv::Mat cameraMatrix(const CameraIntrinsics& camera) {
-  cv::Mat K;
-  cv::eigen2cv(camera.K(), K);
-  return K;
-}
-
-// The correspondences `subset` of c.
-template <class Index>
-FlowCorrespondences subsetOf(const FlowCorrespondences& c, const std::vector<Index>& subset) {
-  FlowCorrespondences out;
-  for (const Index i : subset) {
-    out.points_a.push_back(c.points_a[i]);
-    out.pixels_b.push_back(c.pixels_b[i]);
+// The squared reprojection errors of `subset` under T (points behind the camera left out) and,
+// when H and g are given, the Gauss-Newton normal equations of a left increment exp(xi) * T.
+double reprojectionCost(const FlowCorrespondences& c, const std::vector<int>& subset, const CameraIntrinsics& camera,
+                        const SE3& T, Matrix6d* H = nullptr, Vector6d* g = nullptr) {
+  double cost = 0;
+  if (H) H->setZero();
+  if (g) g->setZero();
+  for (const int i : subset) {
+    const cv::Point3f& p = c.points_a[i];
+    const Eigen::Vector3d q = T * Eigen::Vector3d(p.x, p.y, p.z);
+    if (!(q.z() > 0)) continue;
+    const double iz = 1 / q.z();
+    const Eigen::Vector2d r(camera.fx * q.x() * iz + camera.cx - c.pixels_b[i].x,
+                            camera.fy * q.y() * iz + camera.cy - c.pixels_b[i].y);
+    cost += r.squaredNorm();
+    if (!H) continue;
+    Eigen::Matrix<double, 2, 3> dproj;
+    dproj << camera.fx * iz, 0, -camera.fx * q.x() * iz * iz, 0, camera.fy * iz, -camera.fy * q.y() * iz * iz;
+    Eigen::Matrix<double, 3, 6> dq;
+    dq << Eigen::Matrix3d::Identity(), -skew(q);
+    const Eigen::Matrix<double, 2, 6> J = dproj * dq;
+    H->noalias() += J.transpose() * J;
+    *g += J.transpose() * r;
   }
-  return out;
+  return cost;
 }
 
-// T refined by Levenberg-Marquardt on the correspondences `subset` (unchanged with fewer than 6).
+// T refined by Levenberg-Marquardt on the correspondences `subset` (unchanged with fewer than 6):
+// at most 10 steps, until a step moves less than 1e-6 (radians, metres).
 SE3 refineOn(const FlowCorrespondences& c, const std::vector<int>& subset, const CameraIntrinsics& camera, const SE3& T) {
   constexpr size_t kMinPoints = 6;
   if (subset.size() < kMinPoints) return T;
-  const FlowCorrespondences s = subsetOf(c, subset);
-  cv::Mat rvec, tvec;
-  toRvecTvec(T, rvec, tvec);
-  const cv::TermCriteria stop(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 10, 1e-6);
-  cv::solvePnPRefineLM(s.points_a, s.pixels_b, cameraMatrix(camera), cv::noArray(), rvec, tvec, stop);
-  return fromRvecTvec(rvec, tvec);
+  SE3 best = T;
+  Matrix6d H;
+  Vector6d g;
+  double cost = reprojectionCost(c, subset, camera, best, &H, &g);
+  double lambda = 1e-3;
+  for (int it = 0; it < 10; ++it) {
+    Matrix6d A = H;
+    A.diagonal() *= 1 + lambda;
+    const Vector6d xi = A.ldlt().solve(-g);
+    if (!xi.allFinite()) break;
+    const SE3 next = orthonormalized(expSE3(xi) * best);
+    const double next_cost = reprojectionCost(c, subset, camera, next);
+    if (next_cost < cost) {
+      best = next;
+      cost = reprojectionCost(c, subset, camera, best, &H, &g);
+      lambda = std::max(lambda / 10, 1e-9);
+    } else {
+      lambda *= 10;
+    }
+    if (xi.lpNorm<Eigen::Infinity>() < 1e-6) break;
+  }
+  return best;
 }
 
 // Motions from four correspondences each (P3P on three, the fourth choosing; p3p.h): `global`
