@@ -94,24 +94,31 @@ inline float lanesDot(const float* a, const float* b, int n) {
 }
 
 // The Gauss-Newton terms of one image row, kept column by column (Jacobian J0..J5, residual r,
-// pixel weight v, normalised squared residual q), so that the IRLS weights, the Cauchy cost and
-// the normal equations are computed in loops the compiler vectorises, instead of 27 scalar updates
-// per term.
+// pixel weight v), so that the residuals' scales, the IRLS weights, the Cauchy cost and the normal
+// equations are computed in loops the compiler vectorises, instead of 27 scalar updates per term.
 class RowTerms {
  public:
-  explicit RowTerms(int max_terms) {
+  RowTerms(int max_terms, float inv_c2, float slope_sigma) : inv_c2_(inv_c2), slope_sigma_(slope_sigma) {
     for (auto& col : cols_) col.assign((max_terms + kLanes - 1) / kLanes * kLanes, 0.0f);
   }
-  void add(const float J[6], float r, float v, float q) {
+  // A term whose J and r are final.
+  void add(const float J[6], float r, float v) { add(J, r, v, 1.0f, 0.0f); }
+  // A depth term whose J and r are still to be divided by sqrt(s2) + sqrt(g2) * slope_sigma
+  // (s2: the sum of the two depths' squared sigmas, g2: the squared depth gradient; the final
+  // terms above pass 1 and 0, a division by exactly 1).
+  void add(const float J[6], float r, float v, float s2, float g2) {
     for (int k = 0; k < 6; ++k) cols_[k][n_] = J[k];
     cols_[kR][n_] = r;
     cols_[kV][n_] = v;
-    cols_[kQ][n_] = q;
+    cols_[kS2][n_] = s2;
+    cols_[kG2][n_] = g2;
     ++n_;
   }
   // Adds the upper triangle of J^T W J (21, row by row) and J^T W r (6) with the Cauchy weights
-  // w = v / (1 + q), summed in float, to H and g, and returns sum v log(1 + q); starts the next row.
+  // w = v / (1 + q), q = r^2 / c^2, summed in float, to H and g, and returns sum v log(1 + q);
+  // starts the next row.
   float sumInto(std::array<double, 21>& H, std::array<double, 6>& g) {
+    scaleDepthTerms();
     const int n = (n_ + kLanes - 1) / kLanes * kLanes;
     for (auto& col : cols_) std::fill(col.begin() + n_, col.begin() + n, 0.0f);
     const float* v = cols_[kV].data();
@@ -133,9 +140,29 @@ class RowTerms {
   }
 
  private:
-  static constexpr int kR = 6, kV = 7, kQ = 8, kW = 9, kWJ = 10;  // columns after J0..J5; kWJ: scratch
-  std::array<std::vector<float>, 11> cols_;
+  // Divides the depth terms' J and r by their sigma and sets q for all terms.
+  void scaleDepthTerms() {
+    const float* s2 = cols_[kS2].data();
+    const float* g2 = cols_[kG2].data();
+    float* inv_s = cols_[kW].data();
+    for (int t = 0; t < n_; ++t) inv_s[t] = 1.0f / (std::sqrt(s2[t]) + std::sqrt(g2[t]) * slope_sigma_);
+    for (int k = 0; k < 6; ++k) {
+      float* J = cols_[k].data();
+      for (int t = 0; t < n_; ++t) J[t] *= inv_s[t];
+    }
+    float* r = cols_[kR].data();
+    float* q = cols_[kQ].data();
+    for (int t = 0; t < n_; ++t) {
+      r[t] *= inv_s[t];
+      q[t] = r[t] * r[t] * inv_c2_;
+    }
+  }
+
+  // Columns after J0..J5; kW and kWJ: scratch.
+  static constexpr int kR = 6, kV = 7, kQ = 8, kW = 9, kWJ = 10, kS2 = 11, kG2 = 12;
+  std::array<std::vector<float>, 13> cols_;
   int n_ = 0;
+  float inv_c2_, slope_sigma_;
 };
 
 // Normal equations (upper triangle of J^T W J, J^T W r), cost and count. Terms are summed in
@@ -169,6 +196,19 @@ struct Warp {
   float u, v;        // pixel in the current frame
   int x0, y0;
   float ax, ay;
+};
+
+// The warps of one image row, column by column (see LevelTerms::warpRow).
+struct RowWarp {
+  std::vector<float> qx, qy, qz, iz, u, v;
+  std::vector<int32_t> ok;  // 1 where the pixel takes part
+  explicit RowWarp(int cols) : qx(cols), qy(cols), qz(cols), iz(cols), u(cols), v(cols), ok(cols) {}
+  Warp at(int x) const {
+    Warp w{qx[x], qy[x], qz[x], iz[x], u[x], v[x], static_cast<int>(u[x]), static_cast<int>(v[x]), 0, 0};
+    w.ax = w.u - w.x0;
+    w.ay = w.v - w.y0;
+    return w;
+  }
 };
 
 inline bool warpPixel(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const CameraIntrinsics& cam, float px,
@@ -252,19 +292,49 @@ struct LevelTerms {
     return sigma_a + sigma_b * dz * dz;
   }
 
-  // The terms of row y: intensity and depth of every source pixel that warps into the target.
-  void row(int y, RowTerms& terms, Accumulator& a) const {
+  // Where the pixels of row y land in the target, in a loop the compiler vectorises: w.q*, w.iz,
+  // w.u, w.v of every pixel and whether it takes part (depth in range, in front of the target
+  // camera, inside its image); the gathers that follow are scalar.
+  void warpRow(int y, RowWarp& rw) const {
     const float* dA = A.depth.ptr<float>(y);
+    // Locals, so that the compiler sees that the stores below do not change them.
+    const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+    const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), t0 = t.x(), t1 = t.y(), t2 = t.z();
+    const float fx_ = fx, fy_ = fy, cx_ = cx, cy_ = cy, inv_fx_ = inv_fx, zmin_ = zmin, zmax_ = zmax;
+    const float ny = (y - cy) * inv_fy;
+    const float umax = static_cast<float>(A.camera.width - 1), vmax = static_cast<float>(A.camera.height - 1);
+    float *qxs = rw.qx.data(), *qys = rw.qy.data(), *qzs = rw.qz.data(), *izs = rw.iz.data();
+    float *us = rw.u.data(), *vs = rw.v.data();
+    int32_t* ok = rw.ok.data();
+    const int cols = A.depth.cols;  // a local: ok's stores could change A.depth.cols for all the compiler knows
+    for (int x = 1; x < cols - 1; ++x) {
+      const float z = dA[x];
+      const float px = (x - cx_) * inv_fx_ * z, py = ny * z;
+      const float qx = r00 * px + r01 * py + r02 * z + t0;
+      const float qy = r10 * px + r11 * py + r12 * z + t1;
+      const float qz = r20 * px + r21 * py + r22 * z + t2;
+      const float iz = 1.0f / qz;
+      const float u = fx_ * qx * iz + cx_, v = fy_ * qy * iz + cy_;
+      qxs[x] = qx;
+      qys[x] = qy;
+      qzs[x] = qz;
+      izs[x] = iz;
+      us[x] = u;
+      vs[x] = v;
+      ok[x] = (z >= zmin_) & (z <= zmax_) & (qz >= zmin_) & (u >= 0) & (v >= 0) & (u < umax) & (v < vmax);
+    }
+  }
+
+  // The terms of row y: intensity and depth of every source pixel that warps into the target.
+  void row(int y, RowWarp& rw, RowTerms& terms, Accumulator& a) const {
     const float* iA = A.intensity.ptr<float>(y);
     const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
-    const float ny = (y - cy) * inv_fy;
+    warpRow(y, rw);
     for (int x = 1; x < A.depth.cols - 1; ++x) {
-      const float z = dA[x];
-      if (!(z >= zmin && z <= zmax)) continue;
+      if (!rw.ok[x]) continue;
       float v_pix = wr ? wr[x] : 1.0f;
       if (v_pix <= 0) continue;
-      Warp w;
-      if (!warpPixel(R, t, A.camera, (x - cx) * inv_fx * z, ny * z, z, zmin, w)) continue;
+      const Warp w = rw.at(x);
       v_pix *= targetWeight(wB, w);
       if (v_pix <= 0) continue;
       const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
@@ -275,22 +345,19 @@ struct LevelTerms {
         const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
         imageJacobian(bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI, bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI,
                       w, fx, fy, J);
-        terms.add(J, r, v_pix, r * r * inv_c2);
+        terms.add(J, r, v_pix);
         used = true;
       }
       if (use_depth && zB > 0) {
         const float gx = bilinear(B.dgrad_x, w.x0, w.y0, w.ax, w.ay);
         const float gy = bilinear(B.dgrad_y, w.x0, w.y0, w.ax, w.ay);
         const float sA = depthSigma(w.qz), sB = depthSigma(zB);
-        const float inv_s = 1.0f / (std::sqrt(sA * sA + sB * sB) + std::sqrt(gx * gx + gy * gy) * slope_sigma);
-        const float r = (zB - w.qz) * inv_s;
         imageJacobian(gx, gy, w, fx, fy, J);
         // minus d(q_z)/d(xi) = [0 0 1 | q_y -q_x 0]
         J[2] -= 1;
         J[3] -= w.qy;
         J[4] += w.qx;
-        for (float& j : J) j *= inv_s;
-        terms.add(J, r, v_pix, r * r * inv_c2);
+        terms.add(J, zB - w.qz, v_pix, sA * sA + sB * sB, gx * gx + gy * gy);
         used = true;
       }
       if (used) ++a.count;
@@ -309,10 +376,11 @@ Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const 
   std::array<Accumulator, kStripes> acc{};
   const int rows = A.depth.rows;
   cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-    RowTerms terms(2 * A.depth.cols);
+    RowTerms terms(2 * A.depth.cols, level.inv_c2, level.slope_sigma);
+    RowWarp warps(A.depth.cols);
     for (int s = range.start; s < range.end; ++s) {
       const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
-      for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) level.row(y, terms, acc[s]);
+      for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) level.row(y, warps, terms, acc[s]);
     }
   });
   Accumulator total;
