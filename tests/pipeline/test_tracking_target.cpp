@@ -133,6 +133,21 @@ TEST_F(TrackingTargetsTest, ModelKeyframesAndFrameToModelRenderTheMap) {
   EXPECT_GT(cv::countNonZero(both), static_cast<int>(both.total() / 2));
   EXPECT_LT(cv::mean(diff, both)[0], 0.02);
 
+  // A static surface the map does not hold yet (a square 1 m in front of the camera) stays in the
+  // keyframe with the frame's own depth; the map's depth everywhere else.
+  TrackedFrame with_new_surface = tracked(6);
+  cv::Mat near_depth = scene_->render(6).frame.depth.clone();
+  near_depth(cv::Rect(40, 30, 20, 20)).setTo(1.0f);
+  with_new_surface.frame.depth = near_depth;
+  with_new_surface.odo =
+      prepareOdometryFrame(with_new_surface.frame.intensity, near_depth, scene_->camera(), odometry_);
+  TrackingTargets new_surface(keyframes, odometry_, scene_->camera());
+  new_surface.advance(std::move(with_new_surface), true, {}, &map, timings_);
+  const TrackingTarget n = new_surface.choose(&map, timings_);
+  ASSERT_TRUE(n.from_model);
+  EXPECT_FLOAT_EQ(n.odo->level(1).depth.at<float>(20, 25), 1.0f);  // level 1: half size
+  EXPECT_FLOAT_EQ(n.odo->level(1).depth.at<float>(50, 60), rendered.at<float>(50, 60));
+
   PipelineOptions model;
   model.tracking = TrackingMode::FrameToModel;
   TrackingTargets to_model(model, odometry_, scene_->camera());

@@ -43,6 +43,11 @@ std::optional<OdometryFrame> TrackingTargets::modelTarget(const TrackedFrame& so
   cv::resize(predicted, depth, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
   frame.depth.copyTo(depth, depth <= 0);
   if (!keep.empty()) frame.depth.copyTo(depth, keep);
+  // A surface the frame sees in front of the map's is one the map does not hold yet (a static
+  // object just come into view, not yet stable there): without it the target would show the
+  // background behind it, and the object would leave a depth residual in every frame aligned here.
+  constexpr double kInFrontRatio = 0.05;  // of the map's depth
+  frame.depth.copyTo(depth, (frame.depth > 0) & (frame.depth < depth * (1.0 - kInFrontRatio)));
   return prepareOdometryFrame(frame.intensity, depth, camera_, odometry_);
 }
 

@@ -62,7 +62,8 @@ class TrackingTargets {
 
  private:
   // The map's depth predicted at `source`'s pose with its image as the photometric target (its
-  // own depth at the `keep` pixels and where the map has none); none when the prediction covers
+  // own depth at the `keep` pixels, where the map has none and where its own surface lies in
+  // front of the map's by over 5 %); none when the prediction covers
   // less than model_min_valid_fraction of its depth pixels at the odometry's finest level.
   std::optional<OdometryFrame> modelTarget(const TrackedFrame& source, const StaticMap& map,
                                            const cv::Mat& keep = {}) const;
