@@ -52,8 +52,8 @@ class TrackingTargets {
   // Keeps `frame` as the previous frame and, when the policy says so, as the keyframe. A frame
   // whose tracking failed always becomes a keyframe, and so does the first scored frame after a
   // keyframe without scores (the first frame): that keyframe's moving objects carry full weight
-  // and pull every frame aligned to it. `dynamic_mask` (input size) marks the pixels
-  // that keep the frame's depth in a model keyframe.
+  // and pull every frame aligned to it. `dynamic_mask` (input size) marks the pixels that keep the
+  // frame's depth in a model keyframe.
   void advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask, const StaticMap* map,
                Timings& timings);
   // Whether advance() with this pose, status and scores (`scored`: the frame has dynamic scores)
@@ -63,8 +63,8 @@ class TrackingTargets {
  private:
   // The map's depth predicted at `source`'s pose with its image as the photometric target (its
   // own depth at the `keep` pixels, where the map has none and where its own surface lies in
-  // front of the map's by over 5 %); none when the prediction covers
-  // less than model_min_valid_fraction of its depth pixels at the odometry's finest level.
+  // front of the map's by over 5 %); none when the prediction covers less than
+  // model_min_valid_fraction of its depth pixels at the odometry's finest level.
   std::optional<OdometryFrame> modelTarget(const TrackedFrame& source, const StaticMap& map,
                                            const cv::Mat& keep = {}) const;
   bool needsKeyframe(const SE3& T_world_cam, bool tracking_ok, bool scored) const;
