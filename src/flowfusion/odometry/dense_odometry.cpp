@@ -50,23 +50,43 @@ OdometryFrame prepareOdometryFrame(const cv::Mat& intensity, const cv::Mat& dept
 
 namespace {
 
+// A CV_32F image's pixels (borrowed: the Mat must outlive it) without cv::Mat's out-of-line calls
+// (Mat::empty is one in OpenCV 4.6): a call in the per-pixel loops made the compiler spill
+// registers and reload every Mat field for each pixel.
+struct FloatImage {
+  const float* data = nullptr;  // nullptr: no image
+  size_t stride = 0;            // floats per row
+  FloatImage() = default;
+  explicit FloatImage(const cv::Mat& m)
+      : data(m.empty() ? nullptr : m.ptr<float>()), stride(m.empty() ? 0 : m.step1()) {}
+  const float* row(int y) const { return data + y * stride; }
+};
+
 // Bilinear sample of a CV_32F image at (u, v); caller guarantees 0 <= u < cols-1, 0 <= v < rows-1.
-inline float bilinear(const cv::Mat& m, int x0, int y0, float ax, float ay) {
-  const float* r0 = m.ptr<float>(y0) + x0;
-  const float* r1 = m.ptr<float>(y0 + 1) + x0;
+inline float bilinear(const FloatImage& m, int x0, int y0, float ax, float ay) {
+  const float* r0 = m.row(y0) + x0;
+  const float* r1 = m.row(y0 + 1) + x0;
   return (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
 }
 
 // Depth at (u, v) when all four neighbours are valid and lie on one surface, else 0.
-inline float bilinearDepth(const cv::Mat& d, int x0, int y0, float ax, float ay) {
-  const float* r0 = d.ptr<float>(y0) + x0;
-  const float* r1 = d.ptr<float>(y0 + 1) + x0;
+inline float bilinearDepth(const FloatImage& d, int x0, int y0, float ax, float ay) {
+  const float* r0 = d.row(y0) + x0;
+  const float* r1 = d.row(y0 + 1) + x0;
   const float a = r0[0], b = r0[1], c = r1[0], e = r1[1];
   const float lo = std::min(std::min(a, b), std::min(c, e));
   const float hi = std::max(std::max(a, b), std::max(c, e));
   if (lo <= 0 || hi > lo * 1.05f) return 0;
   return (1 - ay) * ((1 - ax) * a + ax * b) + ay * ((1 - ax) * c + ax * e);
 }
+
+// A target level's images and pixel weights (empty: none) as FloatImages.
+struct TargetImages {
+  FloatImage depth, intensity, grad_x, grad_y, dgrad_x, dgrad_y, weight;
+  TargetImages(const PyramidLevel& B, const cv::Mat& wB)
+      : depth(B.depth), intensity(B.intensity), grad_x(B.grad_x), grad_y(B.grad_y), dgrad_x(B.dgrad_x),
+        dgrad_y(B.dgrad_y), weight(wB) {}
+};
 
 // log(1 + q) for q >= 0 to about 1e-4 relative: the robust cost only decides whether a step
 // lowered the cost, and std::log1p took a quarter of the odometry's time.
@@ -239,9 +259,9 @@ cv::Mat weightsAtLevel(const cv::Mat& weights, const cv::Size& size) {
 }
 
 // Target weight at the pixel nearest to a warp, 1 without weights.
-inline float targetWeight(const cv::Mat& weight, const Warp& w) {
-  if (weight.empty()) return 1.0f;
-  return weight.at<float>(w.y0 + (w.ay > 0.5f ? 1 : 0), w.x0 + (w.ax > 0.5f ? 1 : 0));
+inline float targetWeight(const FloatImage& weight, const Warp& w) {
+  if (!weight.data) return 1.0f;
+  return weight.row(w.y0 + (w.ay > 0.5f ? 1 : 0))[w.x0 + (w.ax > 0.5f ? 1 : 0)];
 }
 
 // The target's surface at a warp lies in front of the warped point (depth qz) by more than
@@ -264,9 +284,8 @@ inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy,
 // One level's settings and images, in the float form the per-pixel loop uses.
 struct LevelTerms {
   const PyramidLevel& A;
-  const PyramidLevel& B;
-  const cv::Mat& wimg;
-  const cv::Mat& wB;
+  const TargetImages B;
+  const FloatImage wimg;
   Eigen::Matrix3f R;
   Eigen::Vector3f t;
   float fx, fy, inv_fx, inv_fy, cx, cy;
@@ -277,7 +296,7 @@ struct LevelTerms {
 
   LevelTerms(const PyramidLevel& A_, const PyramidLevel& B_, const cv::Mat& wimg_, const cv::Mat& wB_, const SE3& T,
              const OdometryConfig& c)
-      : A(A_), B(B_), wimg(wimg_), wB(wB_), R(T.rotation().cast<float>()), t(T.translation().cast<float>()),
+      : A(A_), B(B_, wB_), wimg(wimg_), R(T.rotation().cast<float>()), t(T.translation().cast<float>()),
         fx(static_cast<float>(A_.camera.fx)), fy(static_cast<float>(A_.camera.fy)), inv_fx(1.0f / fx),
         inv_fy(1.0f / fy), cx(static_cast<float>(A_.camera.cx)), cy(static_cast<float>(A_.camera.cy)),
         inv_c2(static_cast<float>(1.0 / (c.cauchy_c * c.cauchy_c))),
@@ -328,14 +347,15 @@ struct LevelTerms {
   // The terms of row y: intensity and depth of every source pixel that warps into the target.
   void row(int y, RowWarp& rw, RowTerms& terms, Accumulator& a) const {
     const float* iA = A.intensity.ptr<float>(y);
-    const float* wr = wimg.empty() ? nullptr : wimg.ptr<float>(y);
+    const float* wr = wimg.data ? wimg.row(y) : nullptr;
     warpRow(y, rw);
-    for (int x = 1; x < A.depth.cols - 1; ++x) {
+    const int cols = A.depth.cols;
+    for (int x = 1; x < cols - 1; ++x) {
       if (!rw.ok[x]) continue;
       float v_pix = wr ? wr[x] : 1.0f;
       if (v_pix <= 0) continue;
       const Warp w = rw.at(x);
-      v_pix *= targetWeight(wB, w);
+      v_pix *= targetWeight(B.weight, w);
       if (v_pix <= 0) continue;
       const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
       if (hiddenInTarget(zB, w.qz, occlusion)) continue;
@@ -474,6 +494,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
   const PyramidLevel& A = source.level(level);
   const PyramidLevel& B = target.level(level);
   const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
+  const TargetImages target_images(B, wB);
   const CameraIntrinsics& cam = A.camera;
   PixelResiduals out;
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -496,10 +517,10 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
         if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
                        (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
           continue;
-        if (targetWeight(wB, w) < 0.5f) continue;
-        const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+        if (targetWeight(target_images.weight, w) < 0.5f) continue;
+        const float zB = bilinearDepth(target_images.depth, w.x0, w.y0, w.ax, w.ay);
         if (hiddenInTarget(zB, w.qz, occlusion)) continue;
-        oI[x] = std::abs(bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
+        oI[x] = std::abs(bilinear(target_images.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
         if (zB > 0) oD[x] = std::abs(zB - w.qz);
       }
     }
