@@ -80,22 +80,41 @@ struct CameraView {
 
   float centreDepth(const Surfel& s) const { return (R_cam_world * s.position + t_cam_world).z(); }
 
-  // Depth along pixel (x, y)'s ray of the plane through pc with normal nc (camera frame); pc's
-  // depth where the plane is seen nearly edge-on or the hit lands far from pc.
-  float planeDepth(const Eigen::Vector3f& pc, const Eigen::Vector3f& nc, int x, int y) const {
-    const float denom = nc.x() * (x - cx) / fx + nc.y() * (y - cy) / fy + nc.z();
-    const float z = std::abs(denom) > 1e-3f ? nc.dot(pc) / denom : pc.z();
-    return z >= min_depth && std::abs(z - pc.z()) < 0.5f * pc.z() ? z : pc.z();
-  }
-  float planeDepth(const Surfel& s, int x, int y) const {
-    return planeDepth(R_cam_world * s.position + t_cam_world, R_cam_world * s.normal, x, y);
-  }
+  Eigen::Vector3f centre(const Surfel& s) const { return R_cam_world * s.position + t_cam_world; }
+  Eigen::Vector3f normal(const Surfel& s) const { return R_cam_world * s.normal; }
 };
 
-// Calls visit(pixel, x, y, pc, nc) for every pixel of surfel s's splat as a square of half side
-// `scale` times its projected radius (at least the pixel its centre falls in, at most 2 * max_half
-// wide); pc and nc are its centre and normal in the camera frame. Nothing when the centre is
-// nearer than min_depth.
+// A surfel's plane in a CameraView's frame (centre pc, normal nc) and its depth along the pixel
+// rays ray(x, y) = ((x - cx) / fx, (y - cy) / fy, 1). nc . ray is a column term plus a row term
+// plus nc.z, so a splat computes the terms once per column and row instead of per pixel (the same
+// float operations: the same depths).
+struct ViewPlane {
+  const CameraView& view;
+  Eigen::Vector3f nc;
+  float n_dot_p, centre_z;
+
+  ViewPlane(const CameraView& v, const Eigen::Vector3f& pc, const Eigen::Vector3f& n)
+      : view(v), nc(n), n_dot_p(n.dot(pc)), centre_z(pc.z()) {}
+  ViewPlane(const CameraView& v, const Surfel& s) : ViewPlane(v, v.centre(s), v.normal(s)) {}
+
+  float columnTerm(int x) const { return nc.x() * (x - view.cx) / view.fx; }
+  float rowTerm(int y) const { return nc.y() * (y - view.cy) / view.fy; }
+  // Depth along the ray whose column and row terms sum to image_terms; the centre's depth where
+  // the plane is seen nearly edge-on or the hit lands far from the centre.
+  float depth(float image_terms) const {
+    const float denom = image_terms + nc.z();
+    const float z = std::abs(denom) > 1e-3f ? n_dot_p / denom : centre_z;
+    return z >= view.min_depth && std::abs(z - centre_z) < 0.5f * centre_z ? z : centre_z;
+  }
+  float depth(int x, int y) const { return depth(columnTerm(x) + rowTerm(y)); }
+};
+
+constexpr float kMaxSquareHalf = 8;  // pixels: the largest max_half of squareSplat
+
+// Calls visit(pixel, z) for every pixel of surfel s's splat as a square of half side `scale` times
+// its projected radius (at least the pixel its centre falls in, at most 2 * max_half wide, max_half
+// <= kMaxSquareHalf), z the depth of the surfel's plane there (ViewPlane). Nothing when the centre
+// is nearer than min_depth.
 template <class Visit>
 void squareSplat(const Surfel& s, const CameraView& view, int w, int h, float max_half, float scale, Visit&& visit) {
   const Eigen::Vector3f pc = view.R_cam_world * s.position + view.t_cam_world;
@@ -107,9 +126,13 @@ void squareSplat(const Surfel& s, const CameraView& view, int w, int h, float ma
   const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half)));
   const int y0 = std::max(0, static_cast<int>(std::ceil(v - half)));
   const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half)));
-  const Eigen::Vector3f nc = view.R_cam_world * s.normal;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) visit(static_cast<size_t>(y) * w + x, x, y, pc, nc);
+  const ViewPlane plane(view, pc, view.normal(s));
+  std::array<float, 2 * static_cast<int>(kMaxSquareHalf) + 1> column_terms;
+  for (int x = x0; x <= x1; ++x) column_terms[x - x0] = plane.columnTerm(x);
+  for (int y = y0; y <= y1; ++y) {
+    const float row_term = plane.rowTerm(y);
+    for (int x = x0; x <= x1; ++x) visit(static_cast<size_t>(y) * w + x, plane.depth(column_terms[x - x0] + row_term));
+  }
 }
 
 // Depth per pixel (0 = none): the confidence-weighted mean of the depths splat(k, visit) reports
@@ -130,7 +153,8 @@ std::vector<float> averagedDepth(const std::vector<Surfel>& surfels, const std::
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t p = r.begin(); p < r.end(); ++p)
       if (zbuffer[p] != kEmpty)
-        front[p] = view.planeDepth(surfels[keyIndex(zbuffer[p])], static_cast<int>(p % w), static_cast<int>(p / w));
+        front[p] =
+            ViewPlane(view, surfels[keyIndex(zbuffer[p])]).depth(static_cast<int>(p % w), static_cast<int>(p / w));
   });
   // Weight <= 10 and depth clamped to 1e4 m: a term is below 2^41, a pixel's sum of up to 2^20
   // terms fits an int64.
@@ -537,10 +561,7 @@ cv::Mat StaticMap::predictDepth(const SE3& T_world_cam, const CameraIntrinsics& 
     const Surfel& s = surfels_[k];
     if (s.confidence < stable && s.last_seen < latest) return;
     if ((view.R_cam_world * s.normal).dot(view.R_cam_world * s.position + view.t_cam_world) >= 0) return;
-    squareSplat(s, view, w, h, kMaxHalfSplat, kInnerSquare,
-                [&](size_t pixel, int x, int y, const Eigen::Vector3f& pc, const Eigen::Vector3f& nc) {
-                  visit(pixel, view.planeDepth(pc, nc, x, y));
-                });
+    squareSplat(s, view, w, h, kMaxHalfSplat, kInnerSquare, visit);
   };
   const size_t pixels = static_cast<size_t>(w) * h;
   const std::vector<uint64_t> zbuffer = nearestSurfels(surfels_.size(), pixels, [&](size_t k, auto&& write) {
@@ -562,10 +583,8 @@ cv::Mat StaticMap::predictStableDepth(const SE3& T_world_cam, const CameraIntrin
 
   const std::vector<uint64_t> zbuffer = nearestSurfels(surfels_.size(), pixels, [&](size_t k, auto&& write) {
     if (surfels_[k].confidence < stable) return;
-    squareSplat(surfels_[k], view, w, h, kMaxHalfSplat, 1.0f, [&](size_t pixel, int x, int y, const Eigen::Vector3f& pc,
-                                                             const Eigen::Vector3f& nc) {
-      write(pixel, depthKey(view.planeDepth(pc, nc, x, y), static_cast<uint32_t>(k)));
-    });
+    squareSplat(surfels_[k], view, w, h, kMaxHalfSplat, 1.0f,
+                [&](size_t pixel, float z) { write(pixel, depthKey(z, static_cast<uint32_t>(k))); });
   });
   cv::Mat depth(h, w, CV_32FC1);
   if (intensity) intensity->create(h, w, CV_32FC1);
