@@ -53,34 +53,66 @@ class KMeansClusterer : public Clusterer {
  private:
   static constexpr int kWindow = 5;  // grid points, odd
 
-  // Distinct non-negative labels of `grid` within `radius` of (gu, gv).
-  static int localLabels(const cv::Mat& grid, int gu, int gv, int radius, int* out) {
+  // Distinct non-negative labels of `grid` within `radius` of (gu, gv), in scan order. seen: one
+  // entry per label, an entry equal to `stamp` (a new value per call) marking a label found.
+  static int localLabels(const cv::Mat& grid, int gu, int gv, int radius, std::vector<int>& seen, int stamp,
+                         int* out) {
     int n = 0;
     for (int b = std::max(0, gv - radius); b <= std::min(grid.rows - 1, gv + radius); ++b) {
       const int* row = grid.ptr<int>(b);
       for (int a = std::max(0, gu - radius); a <= std::min(grid.cols - 1, gu + radius); ++a) {
         const int c = row[a];
-        if (c >= 0 && std::find(out, out + n, c) == out + n) out[n++] = c;
+        if (c >= 0 && seen[c] != stamp) {
+          seen[c] = stamp;
+          out[n++] = c;
+        }
       }
     }
     return n;
   }
 
+  // Squared distance of c and p in the float operations of Eigen's squaredNorm of c - p
+  // (x^2 + (y^2 + z^2)).
+  static float squaredDistance(float cx, float cy, float cz, float px, float py, float pz) {
+    const float dx = cx - px, dy = cy - py, dz = cz - pz;
+    return dx * dx + (dy * dy + dz * dz);
+  }
+
+  // The candidate nearest to p, the first of equals.
   static int nearest(const Eigen::Vector3f& p, const std::vector<Eigen::Vector3f>& centres, const int* cand,
                      int ncand) {
     int best = -1;
     float best_d = std::numeric_limits<float>::max();
-    const int n = cand ? ncand : static_cast<int>(centres.size());
-    for (int k = 0; k < n; ++k) {
-      const int c = cand ? cand[k] : k;
-      const float d = (centres[c] - p).squaredNorm();
+    for (int k = 0; k < ncand; ++k) {
+      const Eigen::Vector3f& c = centres[cand[k]];
+      const float d = squaredDistance(c.x(), c.y(), c.z(), p.x(), p.y(), p.z());
       if (d < best_d) {
         best_d = d;
-        best = c;
+        best = cand[k];
       }
     }
     return best;
   }
+
+  // The centres' coordinates column by column: the distances from a point to all of them are a
+  // loop the compiler vectorises (the first Lloyd pass tests every centre for every point).
+  struct CentreColumns {
+    std::vector<float> x, y, z;
+    std::vector<float> distance;  // scratch of nearest()
+    explicit CentreColumns(const std::vector<Eigen::Vector3f>& centres) : distance(centres.size()) {
+      for (const Eigen::Vector3f& c : centres) {
+        x.push_back(c.x());
+        y.push_back(c.y());
+        z.push_back(c.z());
+      }
+    }
+    // The centre nearest to p, the first of equals (as nearest()).
+    int nearest(const Eigen::Vector3f& p) {
+      const size_t n = distance.size();
+      for (size_t k = 0; k < n; ++k) distance[k] = squaredDistance(x[k], y[k], z[k], p.x(), p.y(), p.z());
+      return static_cast<int>(std::min_element(distance.begin(), distance.end()) - distance.begin());
+    }
+  };
 
   // Lloyd's algorithm seeded on a regular image grid of about kmeans_clusters cells; empty
   // clusters are dropped. grid_assign: each grid point's cluster (-1 without depth).
@@ -112,6 +144,9 @@ class KMeansClusterer : public Clusterer {
     if (centres.empty()) centres.push_back(pts[0]);
     std::vector<int> assign(pts.size(), -1);
     grid_assign = cv::Mat(gh, gw, CV_32S, cv::Scalar(-1));
+    CentreColumns seeds(centres);
+    std::vector<int> seen(centres.size(), -1);
+    int stamp = 0;
     for (int it = 0; it < config_.kmeans_iterations; ++it) {
       bool changed = false;
       const cv::Mat prev = grid_assign.clone();
@@ -121,12 +156,12 @@ class KMeansClusterer : public Clusterer {
           if (p < 0) continue;
           int c;
           if (it == 0) {
-            c = nearest(pts[p], centres, nullptr, 0);
+            c = seeds.nearest(pts[p]);
           } else {
             // After the global first pass a point can only move to a cluster present around
             // it (as SLIC): ~3x faster than testing all centres, same result in practice.
             int cand[kWindow * kWindow];
-            const int ncand = localLabels(prev, gu, gv, kWindow / 2, cand);
+            const int ncand = localLabels(prev, gu, gv, kWindow / 2, seen, stamp++, cand);
             c = nearest(pts[p], centres, cand, ncand);
           }
           changed |= c != assign[p];
@@ -159,34 +194,58 @@ class KMeansClusterer : public Clusterer {
     return centres;
   }
 
+  // Distinct non-negative labels of the 3 x 3 grid points around (gu, gv), in scan order.
+  static int cellCandidates(const cv::Mat& grid_label, int gu, int gv, int* cand) {
+    int n = 0;
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du) {
+        const int a = gu + du, b = gv + dv;
+        if (a < 0 || b < 0 || a >= grid_label.cols || b >= grid_label.rows) continue;
+        const int c = grid_label.at<int>(b, a);
+        if (c >= 0 && std::find(cand, cand + n, c) == cand + n) cand[n++] = c;
+      }
+    return n;
+  }
+
+  // Each pixel's label: the nearest of the clusters of the 3 x 3 grid points around its cell (the
+  // first of equals). The points of a row and their distances to a cell's candidates are loops
+  // over the pixels that the compiler vectorises (the same float operations as one pixel at a time).
   void propagate(const cv::Mat& depth, const CameraIntrinsics& camera, const std::vector<Eigen::Vector3f>& centres,
                  const cv::Mat& grid_label, cv::Mat& labels) const {
     const int s = config_.kmeans_subsample;
     const float fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
+    const int cols = depth.cols;
     cv::parallel_for_(cv::Range(0, depth.rows), [&](const cv::Range& rows) {
+      std::vector<float> px(cols), py(cols), best(s);  // best: squared distance so far per pixel of a cell
+      std::vector<int> nearest_label(s);
       for (int v = rows.start; v < rows.end; ++v) {
         const float* z = depth.ptr<float>(v);
         int* l = labels.ptr<int>(v);
-        const int gv = v / s;
-        int cand[9];
-        int last_gu = -1, ncand = 0;
-        for (int u = 0; u < depth.cols; ++u) {
-          if (!detail::validDepth(z[u])) continue;
-          const int gu = u / s;
-          if (gu != last_gu) {
-            last_gu = gu;
-            ncand = 0;
-            for (int dv = -1; dv <= 1; ++dv)
-              for (int du = -1; du <= 1; ++du) {
-                const int a = gu + du, b = gv + dv;
-                if (a < 0 || b < 0 || a >= grid_label.cols || b >= grid_label.rows) continue;
-                const int c = grid_label.at<int>(b, a);
-                if (c >= 0 && std::find(cand, cand + ncand, c) == cand + ncand) cand[ncand++] = c;
-              }
-          }
+        for (int u = 0; u < cols; ++u) {
+          px[u] = (u - cx) * z[u] / fx;
+          py[u] = (v - cy) * z[u] / fy;
+        }
+        for (int u0 = 0; u0 < cols; u0 += s) {
+          int cand[9];
+          const int ncand = cellCandidates(grid_label, u0 / s, v / s, cand);
           if (ncand == 0) continue;
-          const Eigen::Vector3f p((u - cx) * z[u] / fx, (v - cy) * z[u] / fy, z[u]);
-          l[u] = nearest(p, centres, cand, ncand);
+          const int n = std::min(s, cols - u0);
+          const float *cell_x = px.data() + u0, *cell_y = py.data() + u0, *cell_z = z + u0;
+          float* cell_best = best.data();
+          int* cell_label = nearest_label.data();
+          std::fill(best.begin(), best.end(), std::numeric_limits<float>::max());
+          for (int k = 0; k < ncand; ++k) {
+            const float c_x = centres[cand[k]].x(), c_y = centres[cand[k]].y(), c_z = centres[cand[k]].z();
+            const int label = cand[k];
+            for (int j = 0; j < n; ++j) {  // branch-free, so that it vectorises
+              const float d = squaredDistance(c_x, c_y, c_z, cell_x[j], cell_y[j], cell_z[j]);
+              const int nearer = -static_cast<int>(d < cell_best[j]);  // all bits set where d is nearer
+              cell_label[j] = (label & nearer) | (cell_label[j] & ~nearer);
+              cell_best[j] = std::min(cell_best[j], d);
+            }
+          }
+          for (int j = 0; j < n; ++j)
+            if (detail::validDepth(cell_z[j])) l[u0 + j] = nearest_label[j];
         }
       }
     });
