@@ -316,6 +316,9 @@ TEST_F(DenseOdometryTest, PixelResidualsSkipWhereTheTargetIsWeightedOut) {
   const cv::Rect left(2, 2, w.cols / 2 - 4, w.rows - 4), right(w.cols / 2 + 2, 2, w.cols / 2 - 4, w.rows - 4);
   EXPECT_EQ(cv::countNonZero(r.abs_depth(left) == r.abs_depth(left)), 0);  // all NaN
   EXPECT_GT(cv::countNonZero(r.abs_depth(right) == r.abs_depth(right)), right.area() / 2);
+  // Marked as landing on the target's mover, where they have depth (compared with nothing).
+  EXPECT_GT(cv::countNonZero(r.on_target_mover(left) == 1.f), left.area() / 2);
+  EXPECT_EQ(cv::countNonZero(r.on_target_mover(right)), 0);
 }
 
 // A near occluder pasted into the target (half the depth, a flat grey) covers a quarter of the
@@ -351,6 +354,12 @@ TEST_F(OccludedTargetTest, PixelResidualsSkipWhatTheTargetHides) {
   // 408 of 18096 pixels measured).
   EXPECT_LT(finite(r.abs_intensity(inside)), inside.area() / 20);
   EXPECT_GT(finite(r.abs_depth(outside)), outside.area() / 2);
+  // Hidden even where the target's occluder is weighted out as a mover: not on the mover (but
+  // for its depth edges, where the target has no depth to hide them).
+  cv::Mat w(frame.depth.size(), CV_32F, cv::Scalar(1.0f));
+  w(occluder).setTo(0.0f);
+  EXPECT_LT(cv::countNonZero(computePixelResiduals(a, b, SE3::Identity(), 0, c, w).on_target_mover(inside)),
+            inside.area() / 20);
   c.occlusion_ratio = 0;  // off: the hidden background is compared with the occluder
   const PixelResiduals all = computePixelResiduals(a, b, SE3::Identity(), 0, c);
   EXPECT_GT(finite(all.abs_depth(inside)), inside.area() / 2);

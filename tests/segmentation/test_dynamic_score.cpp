@@ -296,6 +296,42 @@ TEST(DynamicScores, WeakMotionDoesNotKeepTheModelTerm) {
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }
 
+TEST(DynamicScores, AClusterOnTheTargetsMoversIsDecidedByItsPriorUnlessItMovesOrAgreesWithTheMap) {
+  // Four separate clusters, all dynamic in the previous frame but cluster 3. Clusters 0, 2 and 3
+  // land on the target's movers (no intensity residual); cluster 1 is compared with the target.
+  // Cluster 0 agrees with the map; cluster 3's flow residual shows motion; cluster 2 is the inside
+  // of a turning box, whose flow moves little against the previous frame.
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 8) << 0, 0, 1, 1, 2, 2, 3, 3);
+  g.num_clusters = 4;
+  g.sizes = {2, 2, 2, 2};
+  g.mean_depth = {1.0f, 1.0f, 1.0f, 1.0f};
+  g.centroids.resize(4);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  ResidualImages r;
+  r.r_I = (cv::Mat_<float>(1, 8) << nan, nan, 0.01f, 0.01f, nan, nan, nan, nan);
+  r.r_F = (cv::Mat_<float>(1, 8) << 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 20.f, 20.f);
+  r.on_target_mover = (cv::Mat_<float>(1, 8) << 1, 1, 0, 0, 1, 1, 1, 1);
+  r.a_M = (cv::Mat_<float>(1, 8) << 1, 1, nan, nan, nan, nan, nan, nan);
+  r.prior = (cv::Mat_<float>(1, 8) << 1, 1, 1, 1, 1, 1, nan, nan);
+  ScoreConfig cfg;
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  EXPECT_LT(s.b[0], 0.5f);  // the map's agreement is evidence
+  EXPECT_LT(s.b[1], 0.5f);  // compared with the target and static
+  EXPECT_TRUE(std::isnan(s.delta[2]));
+  EXPECT_GT(s.b[2], 0.9f);  // its carried score decides
+  EXPECT_GT(s.b[3], 0.9f);  // its motion counts
+  cfg.target_mover_share = 0;  // the flow's static claim counts everywhere
+  const DynamicScores off = computeDynamicScores(g, r, cfg);
+  EXPECT_NEAR(off.delta[2], cfg.alpha_F * 0.5, 1e-6);
+  EXPECT_LT(off.b[2], 0.5f);
+  r.on_target_mover.at<float>(0, 5) = 0;  // half of cluster 2 compared (its r_I still NaN)
+  cfg.target_mover_share = 0.75;
+  EXPECT_LT(computeDynamicScores(g, r, cfg).b[2], 0.5f);
+  cfg.target_mover_share = 1.5;
+  EXPECT_THROW(validate(cfg), InputError);
+}
+
 TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameDepth) {
   // A walker without a map behind him (no model term): a swinging shin (cluster 1, 2 m, large flow
   // residual), the stance shin beside it (cluster 2, 2.05 m, still), the wall (cluster 0, 4 m),

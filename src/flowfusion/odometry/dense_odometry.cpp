@@ -500,6 +500,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
   const float nan = std::numeric_limits<float>::quiet_NaN();
   out.abs_intensity = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
   out.abs_depth = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(nan));
+  out.on_target_mover = cv::Mat(A.depth.size(), CV_32F, cv::Scalar(0));
   const Eigen::Matrix3f R = T_target_source.rotation().cast<float>();
   const Eigen::Vector3f t = T_target_source.translation().cast<float>();
   const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
@@ -510,6 +511,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
       const float* iA = A.intensity.ptr<float>(y);
       float* oI = out.abs_intensity.ptr<float>(y);
       float* oD = out.abs_depth.ptr<float>(y);
+      float* oM = out.on_target_mover.ptr<float>(y);
       for (int x = 0; x < A.depth.cols; ++x) {
         const float z = dA[x];
         if (!(z >= zmin && z <= zmax)) continue;
@@ -517,9 +519,12 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
         if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
                        (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
           continue;
-        if (targetWeight(target_images.weight, w) < 0.5f) continue;
         const float zB = bilinearDepth(target_images.depth, w.x0, w.y0, w.ax, w.ay);
         if (hiddenInTarget(zB, w.qz, occlusion)) continue;
+        if (targetWeight(target_images.weight, w) < 0.5f) {
+          oM[x] = 1.f;
+          continue;
+        }
         oI[x] = std::abs(bilinear(target_images.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
         if (zB > 0) oD[x] = std::abs(zB - w.qz);
       }

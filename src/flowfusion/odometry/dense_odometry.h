@@ -99,8 +99,10 @@ class DenseOdometry {
 // target, or lands where target_weights is below 0.5 (a moving object there, not evidence of this
 // pixel's motion).
 struct PixelResiduals {
-  cv::Mat abs_intensity;  // CV_32F
-  cv::Mat abs_depth;      // CV_32F
+  cv::Mat abs_intensity;    // CV_32F
+  cv::Mat abs_depth;        // CV_32F
+  cv::Mat on_target_mover;  // CV_32F: 1 where the pixel lands in view, not hidden, on such a
+                            // moving object of the target (compared with nothing), else 0
 };
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& config,

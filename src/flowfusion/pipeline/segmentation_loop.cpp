@@ -185,6 +185,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
                                                       config_.odometry, *in.target.weights);
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
+      res.on_target_mover = pr.on_target_mover;
       res.r_F = flowResidualAt(flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);

@@ -151,6 +151,8 @@ void validate(const ScoreConfig& c) {
   if (!(c.body_depth_ratio >= 0 && c.body_depth_ratio < 1)) throw InputError("scores.body_depth_ratio must be in [0, 1)");
   if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
     throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
+  if (!(c.target_mover_share >= 0 && c.target_mover_share <= 1))
+    throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
 }
 
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
@@ -165,21 +167,23 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   checkResidual(residuals.a_M, labels, "a_M");
   checkResidual(residuals.prior, labels, "prior");
   checkResidual(residuals.memory, labels, "memory");
+  checkResidual(residuals.on_target_mover, labels, "on_target_mover");
   const int n = graph.num_clusters;
   if (static_cast<int>(graph.mean_depth.size()) != n || static_cast<int>(graph.sizes.size()) != n)
     throw InputError("scores: cluster graph has " + std::to_string(graph.mean_depth.size()) + " mean depths and " +
                      std::to_string(graph.sizes.size()) + " sizes for " + std::to_string(n) + " clusters");
 
   // Per cluster and term: sum and count of valid pixels.
-  constexpr int K = 7;
+  constexpr int K = 8;
   constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
   constexpr int kAgreement = 4;  // index of a_M: scales the motion terms
   constexpr int kPrior = 5;      // index of the carried scores: the temporal prior
   constexpr int kMemory = 6;     // index of the motion memory: evidence for the model term
+  constexpr int kOnMover = 7;    // index of on_target_mover: pixels compared with nothing
   std::vector<double> sum(K * n, 0.0);
   std::vector<int> cnt(K * n, 0);
-  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D, &residuals.r_F,   &residuals.r_M,
-                              &residuals.a_M, &residuals.prior, &residuals.memory};
+  const cv::Mat* terms[K] = {&residuals.r_I, &residuals.r_D,  &residuals.r_F,   &residuals.r_M,
+                              &residuals.a_M, &residuals.prior, &residuals.memory, &residuals.on_target_mover};
   for (int v = 0; v < labels.rows; ++v) {
     const int* l = labels.ptr<int>(v);
     for (int k = 0; k < K; ++k) {
@@ -197,6 +201,12 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   const auto mean = [&](int c, int k) {
     return cnt[K * c + k] > 0 ? sum[K * c + k] / cnt[K * c + k] : std::numeric_limits<double>::quiet_NaN();
   };
+  // A cluster landing mostly on the target's own movers has only its flow against the previous
+  // frame: a small flow residual there does not show it standing still.
+  const auto uncompared = [&](int c) {
+    return config.target_mover_share > 0 && sum[K * c + kOnMover] >= config.target_mover_share * graph.sizes[c] &&
+           !(cnt[K * c + kAgreement] > 0 && mean(c, kAgreement) > 0.5);
+  };
   // Eq. 10 from the motion terms (r_I, r_D, r_F) and the model term separately.
   std::vector<double> delta(n), model(n, 0.0);
   for (int c = 0; c < n; ++c) {
@@ -211,7 +221,8 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
       any = true;
     }
     if (cnt[K * c + kAgreement] > 0) d *= std::max(0.0, 1.0 - config.model_agreement * mean(c, kAgreement));
-    delta[c] = any ? d : std::numeric_limits<double>::quiet_NaN();
+    const bool evidence = any && !(uncompared(c) && d + model[c] < config.theta_t);
+    delta[c] = evidence ? d : std::numeric_limits<double>::quiet_NaN();
   }
   std::vector<double> prior(n);
   for (int c = 0; c < n; ++c) prior[c] = mean(c, kPrior);

@@ -57,11 +57,18 @@ struct ScoreConfig {
   // a row is remembered, so a static surface flagged once is not, one flagged longer is released
   // after this time (MotionMemory, docs/tuning.md#model_memory_s).
   double model_memory_s = 2.0;
+  // Fraction (our extension; 0 = off): a cluster with at least this share of its pixels landing on
+  // the target's own movers (residuals.on_target_mover) was compared with nothing there, and a
+  // small flow residual alone (the inside of a slow or turning mover) is no evidence that it
+  // stands still: its neighbours and its carried score decide, unless its delta reaches theta_t
+  // or it agrees with the map (docs/tuning.md#target_mover_share).
+  double target_mover_share = 0.5;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_agreement,
-                                                agreement_margin, agreement_intensity, temporal_prior, model_memory_s)
+                                                agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
+                                                target_mover_share)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
@@ -75,6 +82,8 @@ struct ResidualImages {
   cv::Mat a_M;  // agreement with the static model, 1 or 0 (modelAgreement)
   cv::Mat prior;  // previous scores carried into this frame, [0, 1] (ScoreConfig::temporal_prior)
   cv::Mat memory;  // 1 where the pixel moved within model_memory_s, 0 where not (MotionMemory::recall)
+  cv::Mat on_target_mover;  // 1 where the pixel lands on the target's own movers, 0 where not
+                            // (PixelResiduals::on_target_mover; ScoreConfig::target_mover_share)
 };
 
 struct DynamicScores {
@@ -96,7 +105,9 @@ double scoreWeight(double delta, double theta_b, double theta_t);
 // missing term does not drop the others), then b from solveScoreEnergy, with p_i the cluster's mean
 // of residuals.prior where it is given (ScoreConfig::temporal_prior), lambda_G scaled on the edges
 // within a body (ScoreConfig::body_smoothing). A group with a cluster whose residuals.memory
-// averages >= 0.5 keeps its model term as if it moved (ScoreConfig::model_memory_s). Throws
+// averages >= 0.5 keeps its model term as if it moved (ScoreConfig::model_memory_s). A cluster
+// mostly on the target's movers with a delta below theta_t (and not agreeing with the map) counts
+// as one without evidence (ScoreConfig::target_mover_share). Throws
 // InputError on mismatched sizes/types or invalid thresholds.
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
                                    const ScoreConfig& config);
