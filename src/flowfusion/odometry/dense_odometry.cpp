@@ -222,7 +222,10 @@ struct Warp {
 struct RowWarp {
   std::vector<float> qx, qy, qz, iz, u, v;
   std::vector<int32_t> ok;  // 1 where the pixel takes part
-  explicit RowWarp(int cols) : qx(cols), qy(cols), qz(cols), iz(cols), u(cols), v(cols), ok(cols) {}
+  // Always inlined: the row loops vectorise, and keep their column pointers in registers, only
+  // where the compiler sees that the seven columns are distinct allocations.
+  [[gnu::always_inline]] explicit RowWarp(int cols)
+      : qx(cols), qy(cols), qz(cols), iz(cols), u(cols), v(cols), ok(cols) {}
   Warp at(int x) const {
     Warp w{qx[x], qy[x], qz[x], iz[x], u[x], v[x], static_cast<int>(u[x]), static_cast<int>(v[x]), 0, 0};
     w.ax = w.u - w.x0;
@@ -231,21 +234,36 @@ struct RowWarp {
   }
 };
 
-inline bool warpPixel(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const CameraIntrinsics& cam, float px,
-                      float py, float pz, float min_depth, Warp& w) {
-  w.qx = R(0, 0) * px + R(0, 1) * py + R(0, 2) * pz + t.x();
-  w.qy = R(1, 0) * px + R(1, 1) * py + R(1, 2) * pz + t.y();
-  w.qz = R(2, 0) * px + R(2, 1) * py + R(2, 2) * pz + t.z();
-  if (w.qz < min_depth) return false;
-  w.iz = 1.0f / w.qz;
-  w.u = static_cast<float>(cam.fx) * w.qx * w.iz + static_cast<float>(cam.cx);
-  w.v = static_cast<float>(cam.fy) * w.qy * w.iz + static_cast<float>(cam.cy);
-  if (!(w.u >= 0 && w.v >= 0 && w.u < cam.width - 1 && w.v < cam.height - 1)) return false;
-  w.x0 = static_cast<int>(w.u);
-  w.y0 = static_cast<int>(w.v);
-  w.ax = w.u - w.x0;
-  w.ay = w.v - w.y0;
-  return true;
+// Where the pixels of row y (depths dA) land in the target, as computePixelResiduals defines it
+// (the back-projection divides by fx and fy where LevelTerms::warpRow multiplies by their
+// inverses), in a loop the compiler vectorises; ok: depth in [zmin, zmax], in front of the target
+// camera, inside its image.
+void warpRowDividing(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const CameraIntrinsics& cam, const float* dA,
+                     int y, int cols, float zmin, float zmax, RowWarp& rw) {
+  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), t0 = t.x(), t1 = t.y(), t2 = t.z();
+  const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
+  const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
+  const float umax = static_cast<float>(cam.width - 1), vmax = static_cast<float>(cam.height - 1);
+  float *qxs = rw.qx.data(), *qys = rw.qy.data(), *qzs = rw.qz.data(), *izs = rw.iz.data();
+  float *us = rw.u.data(), *vs = rw.v.data();
+  int32_t* ok = rw.ok.data();
+  for (int x = 0; x < cols; ++x) {
+    const float z = dA[x];
+    const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
+    const float qx = r00 * px + r01 * py + r02 * z + t0;
+    const float qy = r10 * px + r11 * py + r12 * z + t1;
+    const float qz = r20 * px + r21 * py + r22 * z + t2;
+    const float iz = 1.0f / qz;
+    const float u = fx * qx * iz + cx, v = fy * qy * iz + cy;
+    qxs[x] = qx;
+    qys[x] = qy;
+    qzs[x] = qz;
+    izs[x] = iz;
+    us[x] = u;
+    vs[x] = v;
+    ok[x] = (z >= zmin) & (z <= zmax) & (qz >= zmin) & (u >= 0) & (v >= 0) & (u < umax) & (v < vmax);
+  }
 }
 
 // Weights resized to a level's size (nearest, as weights are per-cluster constants).
@@ -505,20 +523,18 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
   const Eigen::Vector3f t = T_target_source.translation().cast<float>();
   const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
   const float occlusion = static_cast<float>(c.occlusion_ratio);
+  const int cols = A.depth.cols;
   cv::parallel_for_(cv::Range(0, A.depth.rows), [&](const cv::Range& range) {
+    RowWarp warps(cols);
     for (int y = range.start; y < range.end; ++y) {
-      const float* dA = A.depth.ptr<float>(y);
       const float* iA = A.intensity.ptr<float>(y);
       float* oI = out.abs_intensity.ptr<float>(y);
       float* oD = out.abs_depth.ptr<float>(y);
       float* oM = out.on_target_mover.ptr<float>(y);
-      for (int x = 0; x < A.depth.cols; ++x) {
-        const float z = dA[x];
-        if (!(z >= zmin && z <= zmax)) continue;
-        Warp w;
-        if (!warpPixel(R, t, cam, (x - static_cast<float>(cam.cx)) * z / static_cast<float>(cam.fx),
-                       (y - static_cast<float>(cam.cy)) * z / static_cast<float>(cam.fy), z, zmin, w))
-          continue;
+      warpRowDividing(R, t, cam, A.depth.ptr<float>(y), y, cols, zmin, zmax, warps);
+      for (int x = 0; x < cols; ++x) {
+        if (!warps.ok[x]) continue;
+        const Warp w = warps.at(x);
         const float zB = bilinearDepth(target_images.depth, w.x0, w.y0, w.ax, w.ay);
         if (hiddenInTarget(zB, w.qz, occlusion)) continue;
         if (targetWeight(target_images.weight, w) < 0.5f) {
