@@ -37,9 +37,10 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       clusterer_(makeClusterer(config.clustering)),
       memory_(config.scores.model_memory_s, seg_camera_) {}
 
-cv::Mat SegmentationLoop::flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const {
+cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur,
+                                         const SE3& T_prev_cur) const {
   const int level = config_.pipeline.segmentation_level;
-  return flowResidual(flow, egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur)) * std::ldexp(1.0, level);
+  return flowResidual(seg_flow, egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur)) * std::ldexp(1.0, level);
 }
 
 FlowField SegmentationLoop::computeFlow(const RgbdFrame& cur, const RgbdFrame& previous) {
@@ -50,11 +51,13 @@ void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, M
                            Timings& timings) {
   // The static map's depth rendered for the previous frame; none when that frame was not scored.
   const cv::Mat previous_background = std::exchange(background_, cv::Mat());
-  if (config_.consensus.enabled) restartFromFlow(in, flow, previous_background, estimate, timings);
-  if (estimate.odometry.ok) scoreRounds(in, flow, estimate, timings);
+  // The flow at the segmentation level, resampled once for all of this frame's residuals.
+  const FlowField seg_flow = resizeFlow(flow, cv::Size(seg_camera_.width, seg_camera_.height));
+  if (config_.consensus.enabled) restartFromFlow(in, flow, seg_flow, previous_background, estimate, timings);
+  if (estimate.odometry.ok) scoreRounds(in, seg_flow, estimate, timings);
 }
 
-void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow,
+void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow, const FlowField& seg_flow,
                                        const cv::Mat& previous_background, MotionEstimate& estimate, Timings& timings) {
   // Nothing is known of the movers yet (the first frame pair, or after a frame left unscored): the
   // odometry had no weights to keep a mover out, so the flow is split whatever the odometry
@@ -80,7 +83,7 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   const bool misled = start_movers || misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus, relation);
   if (!shows_mover && !misled) return;
   const cv::Mat mover =
-      moverScores(flow, in.cur, *split, start_movers ? MoverRule::kBetterExplained : MoverRule::kOwn);
+      moverScores(seg_flow, in.cur, *split, start_movers ? MoverRule::kBetterExplained : MoverRule::kOwn);
   if (shows_mover) estimate.flow_mover = mover;
   estimate.flow_mover_holds = start_movers;
   if (!misled) return;
@@ -118,12 +121,12 @@ std::vector<MapRelation> SegmentationLoop::mapRelations(const cv::Mat& previous_
   return relation;
 }
 
-cv::Mat SegmentationLoop::moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split,
+cv::Mat SegmentationLoop::moverScores(const FlowField& seg_flow, const OdometryFrame& cur, const FlowMotionSplit& split,
                                       MoverRule rule) const {
   const bool own = rule == MoverRule::kOwn;
   const double off_px = (own ? 2 : 1) * config_.consensus.inlier_px;
-  const cv::Mat r_background = flowResidualAt(flow, cur, split.T_b_a_background);
-  const cv::Mat r_mover = flowResidualAt(flow, cur, split.T_b_a_mover);
+  const cv::Mat r_background = flowResidualAt(seg_flow, cur, split.T_b_a_background);
+  const cv::Mat r_mover = flowResidualAt(seg_flow, cur, split.T_b_a_mover);
   const cv::Mat mover = (r_background > off_px) & (r_mover < (own ? 0.5 : 1.0) * r_background);
   cv::Mat scores;
   mover.convertTo(scores, CV_32F, 1.0 / 255);
@@ -148,7 +151,7 @@ SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationIn
   return e;
 }
 
-void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
+void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, MotionEstimate& estimate,
                                    Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
   const int level = opt.segmentation_level;
@@ -186,7 +189,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
-      res.r_F = flowResidualAt(flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
+      res.r_F = flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);

@@ -51,20 +51,21 @@ class SegmentationLoop {
   void run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
 
  private:
-  // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image.
-  cv::Mat flowResidualAt(const FlowField& flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
+  // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image;
+  // `seg_flow` is the flow resampled to the segmentation level (resizeFlow).
+  cv::Mat flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
   // Where the samples' points lay in the previous frame (its depth) against the static map's depth
   // rendered for it (segmentation level; empty: no relations).
   std::vector<MapRelation> mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
                                         const FlowCorrespondences& samples) const;
-  void restartFromFlow(const SegmentationInput& in, const FlowField& flow, const cv::Mat& previous_background,
-                       MotionEstimate& estimate, Timings& timings);
+  void restartFromFlow(const SegmentationInput& in, const FlowField& flow, const FlowField& seg_flow,
+                       const cv::Mat& previous_background, MotionEstimate& estimate, Timings& timings);
   // Which pixels are the split's mover: its own (the background's motion leaves them beyond
   // 2 inlier_px, the mover's explains them within half of that), or, at the start, those the
   // background's motion leaves beyond inlier_px and the mover's explains better.
   enum class MoverRule { kOwn, kBetterExplained };
   // 1 on the split's mover, 0 elsewhere (CV_32F at the segmentation level).
-  cv::Mat moverScores(const FlowField& flow, const OdometryFrame& cur, const FlowMotionSplit& split,
+  cv::Mat moverScores(const FlowField& seg_flow, const OdometryFrame& cur, const FlowMotionSplit& split,
                       MoverRule rule) const;
   // The static map's depth at the current estimate, its occlusion r_M and agreement a_M (empty when off).
   struct MapEvidence {
@@ -72,7 +73,8 @@ class SegmentationLoop {
   };
   MapEvidence mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
                           Timings& timings) const;
-  void scoreRounds(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+  void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, MotionEstimate& estimate,
+                   Timings& timings);
 
   SystemConfig config_;
   CameraIntrinsics camera_;
