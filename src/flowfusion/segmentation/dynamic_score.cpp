@@ -205,7 +205,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   // frame: a small flow residual there does not show it standing still.
   const auto uncompared = [&](int c) {
     return config.target_mover_share > 0 && sum[K * c + kOnMover] >= config.target_mover_share * graph.sizes[c] &&
-           !(cnt[K * c + kAgreement] > 0 && mean(c, kAgreement) > 0.5);
+           !(mean(c, kAgreement) > 0.5);  // NaN (no agreement term) is not above
   };
   // Eq. 10 from the motion terms (r_I, r_D, r_F) and the model term separately.
   std::vector<double> delta(n), model(n, 0.0);
