@@ -221,7 +221,7 @@ struct Warp {
   float ax, ay;
 };
 
-// The warps of one image row, column by column (see LevelTerms::warpRow).
+// The warps of one image row, column by column (see warpRow).
 struct RowWarp {
   std::vector<float> qx, qy, qz, iz, u, v;
   std::vector<int32_t> ok;  // 1 where the pixel takes part
@@ -237,23 +237,39 @@ struct RowWarp {
   }
 };
 
-// Where the pixels of row y (depths dA) land in the target, as computePixelResiduals defines it
-// (the back-projection divides by fx and fy where LevelTerms::warpRow multiplies by their
-// inverses), in a loop the compiler vectorises; ok: depth in [zmin, zmax], in front of the target
-// camera, inside its image.
-void warpRowDividing(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const CameraIntrinsics& cam, const float* dA,
-                     int y, int cols, float zmin, float zmax, RowWarp& rw) {
+// How a row's back-projection scales by the focal lengths: computePixelResiduals divides by fx and
+// fy, the odometry's accumulation multiplies by their inverses (last bits differ, so each keeps its
+// own arithmetic).
+enum class FocalScaling { kDivide, kMultiplyInverse };
+
+// Where the pixels x0 <= x < x1 of row y (depths dA) land in the target, in a loop the compiler
+// vectorises: w.q*, w.iz, w.u, w.v of every pixel and whether it takes part (depth in [zmin,
+// zmax], in front of the target camera, inside its image); the gathers that follow are scalar.
+// Always inlined, like RowWarp's constructor, so the loop sees the columns' allocations.
+template <FocalScaling kScaling>
+[[gnu::always_inline]] inline void warpRow(const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
+                                           const CameraIntrinsics& cam, const float* dA, int y, int x0, int x1,
+                                           float zmin, float zmax, RowWarp& rw) {
+  // Locals, so that the compiler sees that the stores below do not change them.
   const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
   const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), t0 = t.x(), t1 = t.y(), t2 = t.z();
   const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
   const float cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
+  const float inv_fx = 1.0f / fx, ny = (y - cy) * (1.0f / fy);
   const float umax = static_cast<float>(cam.width - 1), vmax = static_cast<float>(cam.height - 1);
   float *qxs = rw.qx.data(), *qys = rw.qy.data(), *qzs = rw.qz.data(), *izs = rw.iz.data();
   float *us = rw.u.data(), *vs = rw.v.data();
   int32_t* ok = rw.ok.data();
-  for (int x = 0; x < cols; ++x) {
+  for (int x = x0; x < x1; ++x) {
     const float z = dA[x];
-    const float px = (x - cx) * z / fx, py = (y - cy) * z / fy;
+    float px, py;
+    if constexpr (kScaling == FocalScaling::kDivide) {
+      px = (x - cx) * z / fx;
+      py = (y - cy) * z / fy;
+    } else {
+      px = (x - cx) * inv_fx * z;
+      py = ny * z;
+    }
     const float qx = r00 * px + r01 * py + r02 * z + t0;
     const float qy = r10 * px + r11 * py + r12 * z + t1;
     const float qz = r20 * px + r21 * py + r22 * z + t2;
@@ -309,7 +325,7 @@ struct LevelTerms {
   const FloatImage wimg;
   Eigen::Matrix3f R;
   Eigen::Vector3f t;
-  float fx, fy, inv_fx, inv_fy, cx, cy;
+  float fx, fy;
   float inv_c2, half_c2, sI;  // Cauchy 1 / c^2 and c^2 / 2; alpha_I / sigma_I
   float sigma_a, sigma_b, slope_sigma;
   float zmin, zmax, occlusion;
@@ -318,8 +334,7 @@ struct LevelTerms {
   LevelTerms(const PyramidLevel& A_, const PyramidLevel& B_, const cv::Mat& wimg_, const cv::Mat& wB_, const SE3& T,
              const OdometryConfig& c)
       : A(A_), B(B_, wB_), wimg(wimg_), R(T.rotation().cast<float>()), t(T.translation().cast<float>()),
-        fx(static_cast<float>(A_.camera.fx)), fy(static_cast<float>(A_.camera.fy)), inv_fx(1.0f / fx),
-        inv_fy(1.0f / fy), cx(static_cast<float>(A_.camera.cx)), cy(static_cast<float>(A_.camera.cy)),
+        fx(static_cast<float>(A_.camera.fx)), fy(static_cast<float>(A_.camera.fy)),
         inv_c2(static_cast<float>(1.0 / (c.cauchy_c * c.cauchy_c))),
         half_c2(static_cast<float>(0.5 * c.cauchy_c * c.cauchy_c)),
         sI(static_cast<float>(c.alpha_I / c.sigma_I)), sigma_a(static_cast<float>(c.depth_sigma_a)),
@@ -332,45 +347,12 @@ struct LevelTerms {
     return sigma_a + sigma_b * dz * dz;
   }
 
-  // Where the pixels of row y land in the target, in a loop the compiler vectorises: w.q*, w.iz,
-  // w.u, w.v of every pixel and whether it takes part (depth in range, in front of the target
-  // camera, inside its image); the gathers that follow are scalar.
-  void warpRow(int y, RowWarp& rw) const {
-    const float* dA = A.depth.ptr<float>(y);
-    // Locals, so that the compiler sees that the stores below do not change them.
-    const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
-    const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), t0 = t.x(), t1 = t.y(), t2 = t.z();
-    const float fx_ = fx, fy_ = fy, cx_ = cx, cy_ = cy, inv_fx_ = inv_fx, zmin_ = zmin, zmax_ = zmax;
-    const float ny = (y - cy) * inv_fy;
-    const float umax = static_cast<float>(A.camera.width - 1), vmax = static_cast<float>(A.camera.height - 1);
-    float *qxs = rw.qx.data(), *qys = rw.qy.data(), *qzs = rw.qz.data(), *izs = rw.iz.data();
-    float *us = rw.u.data(), *vs = rw.v.data();
-    int32_t* ok = rw.ok.data();
-    const int cols = A.depth.cols;  // a local: ok's stores could change A.depth.cols for all the compiler knows
-    for (int x = 1; x < cols - 1; ++x) {
-      const float z = dA[x];
-      const float px = (x - cx_) * inv_fx_ * z, py = ny * z;
-      const float qx = r00 * px + r01 * py + r02 * z + t0;
-      const float qy = r10 * px + r11 * py + r12 * z + t1;
-      const float qz = r20 * px + r21 * py + r22 * z + t2;
-      const float iz = 1.0f / qz;
-      const float u = fx_ * qx * iz + cx_, v = fy_ * qy * iz + cy_;
-      qxs[x] = qx;
-      qys[x] = qy;
-      qzs[x] = qz;
-      izs[x] = iz;
-      us[x] = u;
-      vs[x] = v;
-      ok[x] = (z >= zmin_) & (z <= zmax_) & (qz >= zmin_) & (u >= 0) & (v >= 0) & (u < umax) & (v < vmax);
-    }
-  }
-
   // The terms of row y: intensity and depth of every source pixel that warps into the target.
   void row(int y, RowWarp& rw, RowTerms& terms, Accumulator& a) const {
     const float* iA = A.intensity.ptr<float>(y);
     const float* wr = wimg.data ? wimg.row(y) : nullptr;
-    warpRow(y, rw);
     const int cols = A.depth.cols;
+    warpRow<FocalScaling::kMultiplyInverse>(R, t, A.camera, A.depth.ptr<float>(y), y, 1, cols - 1, zmin, zmax, rw);
     for (int x = 1; x < cols - 1; ++x) {
       if (!rw.ok[x]) continue;
       float v_pix = wr ? wr[x] : 1.0f;
@@ -534,7 +516,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
       float* oI = out.abs_intensity.ptr<float>(y);
       float* oD = out.abs_depth.ptr<float>(y);
       float* oM = out.on_target_mover.ptr<float>(y);
-      warpRowDividing(R, t, cam, A.depth.ptr<float>(y), y, cols, zmin, zmax, warps);
+      warpRow<FocalScaling::kDivide>(R, t, cam, A.depth.ptr<float>(y), y, 0, cols, zmin, zmax, warps);
       for (int x = 0; x < cols; ++x) {
         if (!warps.ok[x]) continue;
         const Warp w = warps.at(x);
