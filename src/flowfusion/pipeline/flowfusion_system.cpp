@@ -99,20 +99,19 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
   if (segmentation_ && opt.carry_scores && !prev.scores.empty())
     carried = carryScores(prev.scores, prev.depthAt(opt.segmentation_level),
                           camera_.atLevel(opt.segmentation_level), T_prev_cur_guess.inverse(), 0.f);
-  // The flow needs neither the odometry nor the map: it runs beside the first odometry.
-  std::future<std::pair<FlowField, double>> flow_task;
+  // The flow and the clusters need neither the odometry nor the map: they run beside the first odometry.
+  std::future<FrameCues> cues_task;
   if (segmentation_)
-    flow_task = std::async(std::launch::async, [this, &frame, &prev] {
-      const Clock::time_point flow_start = Clock::now();
-      FlowField flow = segmentation_->computeFlow(frame, prev.frame);
-      return std::make_pair(std::move(flow), msSince(flow_start));
+    cues_task = std::async(std::launch::async, [this, &frame, &cur, &prev] {
+      return segmentation_->computeCues(frame, cur, prev.frame);
     });
   MotionEstimate estimate = firstOdometry(cur, target, T_target_prev, T_prev_cur_guess, carried, result);
   if (segmentation_) {
-    auto [flow, flow_ms] = flow_task.get();
-    timings_.add("flow", flow_ms);
+    const FrameCues cues = cues_task.get();
+    timings_.add("flow", cues.flow_ms);
+    timings_.add("clustering", cues.clustering_ms);
     finishFusion();  // the loop reads the map
-    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, flow, estimate, timings_);
+    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, cues, estimate, timings_);
     result.restarted_from_flow = estimate.restarted_from_flow;
     result.iterations = estimate.rounds;
     flow_restarts_ += estimate.restarted_from_flow;

@@ -1,6 +1,7 @@
 #include "flowfusion/pipeline/segmentation_loop.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -43,18 +44,35 @@ cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const Odomet
   return flowResidual(seg_flow, egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur)) * std::ldexp(1.0, level);
 }
 
-FlowField SegmentationLoop::computeFlow(const RgbdFrame& cur, const RgbdFrame& previous) {
-  return flow_->compute(cur.intensity, previous.intensity);
+RgbdFrame SegmentationLoop::segmentationFrame(const RgbdFrame& frame, const OdometryFrame& cur) const {
+  const int level = config_.pipeline.segmentation_level;
+  RgbdFrame seg_frame;
+  seg_frame.timestamp = frame.timestamp;
+  seg_frame.intensity = cur.level(level).intensity;
+  seg_frame.depth = cur.level(level).depth;
+  return seg_frame;
 }
 
-void SegmentationLoop::run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate,
+FrameCues SegmentationLoop::computeCues(const RgbdFrame& frame, const OdometryFrame& cur, const RgbdFrame& previous) {
+  FrameCues cues;
+  auto start = std::chrono::steady_clock::now();
+  cues.flow = flow_->compute(frame.intensity, previous.intensity);
+  cues.flow_ms = msSince(start);
+  start = std::chrono::steady_clock::now();
+  cues.graph = clusterer_->cluster(segmentationFrame(frame, cur), seg_camera_);
+  cues.clustering_ms = msSince(start);
+  return cues;
+}
+
+void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, MotionEstimate& estimate,
                            Timings& timings) {
+  const FlowField& flow = cues.flow;
   // The static map's depth rendered for the previous frame; none when that frame was not scored.
   const cv::Mat previous_background = std::exchange(background_, cv::Mat());
   // The flow at the segmentation level, resampled once for all of this frame's residuals.
   const FlowField seg_flow = resizeFlow(flow, cv::Size(seg_camera_.width, seg_camera_.height));
   if (config_.consensus.enabled) restartFromFlow(in, flow, seg_flow, previous_background, estimate, timings);
-  if (estimate.odometry.ok) scoreRounds(in, seg_flow, estimate, timings);
+  if (estimate.odometry.ok) scoreRounds(in, seg_flow, cues.graph, estimate, timings);
 }
 
 void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow, const FlowField& seg_flow,
@@ -151,19 +169,11 @@ SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationIn
   return e;
 }
 
-void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, MotionEstimate& estimate,
-                                   Timings& timings) {
+void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
+                                   MotionEstimate& estimate, Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
   const int level = opt.segmentation_level;
-  RgbdFrame seg_frame;
-  seg_frame.timestamp = in.frame.timestamp;
-  seg_frame.intensity = in.cur.level(level).intensity;
-  seg_frame.depth = in.cur.level(level).depth;
-  ClusterGraph graph;
-  {
-    StageTimer timer(timings, "clustering");
-    graph = clusterer_->cluster(seg_frame, seg_camera_);
-  }
+  const RgbdFrame seg_frame = segmentationFrame(in.frame, in.cur);
   ResidualImages res;
   MapEvidence evidence = mapEvidence(in, in.target.T_world_target * estimate.T_target_cur, seg_frame, timings);
   res.r_M = evidence.r_M;

@@ -40,15 +40,23 @@ struct SegmentationInput {
   const StaticMap* map;  // null without fusion
 };
 
+// What the loop needs of the current frame that depends neither on the odometry nor on the map:
+// the dense flow from the current image to the previous one and the current frame's clusters.
+struct FrameCues {
+  FlowField flow;
+  ClusterGraph graph;     // at the segmentation level
+  double flow_ms = 0;     // wall time of each, for Timings ("flow", "clustering")
+  double clustering_ms = 0;
+};
+
 class SegmentationLoop {
  public:
   SegmentationLoop(const SystemConfig& config, const CameraIntrinsics& camera);
-  // Dense flow from the current image to the previous one (independent of the odometry, so it can
-  // run while the first odometry does).
-  FlowField computeFlow(const RgbdFrame& cur, const RgbdFrame& previous);
-  // Refines `estimate`, which holds the first odometry and the carried scores, with `flow` from
-  // computeFlow.
-  void run(const SegmentationInput& in, const FlowField& flow, MotionEstimate& estimate, Timings& timings);
+  // The frame's cues; runs on another thread while the first odometry does (it reads only its
+  // arguments and the flow and clustering backends, which no other call uses).
+  FrameCues computeCues(const RgbdFrame& frame, const OdometryFrame& cur, const RgbdFrame& previous);
+  // Refines `estimate`, which holds the first odometry and the carried scores, with the frame's cues.
+  void run(const SegmentationInput& in, const FrameCues& cues, MotionEstimate& estimate, Timings& timings);
 
  private:
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image;
@@ -73,8 +81,10 @@ class SegmentationLoop {
   };
   MapEvidence mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
                           Timings& timings) const;
-  void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, MotionEstimate& estimate,
-                   Timings& timings);
+  void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
+                   MotionEstimate& estimate, Timings& timings);
+  // The current frame's intensity and depth at the segmentation level.
+  RgbdFrame segmentationFrame(const RgbdFrame& frame, const OdometryFrame& cur) const;
 
   SystemConfig config_;
   CameraIntrinsics camera_;
