@@ -41,10 +41,10 @@ class FlowFusionSystem {
 
   // Processes the next frame (in time order) and returns its pose and mask. Stage times are added
   // to timings() under "odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion".
-  // Three stages run beside others on a second thread, the results the same as one after the other:
-  // the flow and the clusters beside the first odometry, and the frame's fusion into the map beside the next
-  // frame's tracking until that reads the map (its time lands in the row of the frame that waited
-  // for it). The frame's images must stay unchanged until the next frame is processed.
+  // Three stages run beside others on worker threads, the results the same as one after the other:
+  // the flow and the clusters beside the first odometry, and the frame's fusion into the map beside
+  // the next frame's tracking until that reads the map (its time lands in the row of the frame that
+  // waited for it). The frame's images must stay unchanged until the next frame is processed.
   FrameResult process(const RgbdFrame& frame);
 
   const Trajectory& trajectory() const { return trajectory_; }
