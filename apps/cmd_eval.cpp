@@ -1,14 +1,19 @@
 // `flowfusion eval ate|rpe|seg|map`: the TUM benchmark's trajectory metrics, mask metrics and the
 // distance between two map point clouds.
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "command.h"
+#include "flowfusion/core/atomic_file.h"
+#include "flowfusion/core/error.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/fusion/map_compare.h"
 #include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/report/worst_masks.h"
 
 namespace ff::app {
 namespace {
@@ -16,6 +21,9 @@ namespace {
 struct EvalOptions {
   std::string gt, est;
   bool json = false;
+  std::string sheet, sequence;  // eval seg: the contact sheet's path, the masks' sequence folder
+  report::WorstMasksOptions sheet_options;
+  bool overwrite = false;
   double max_diff_s = 0.02;
   double delta_s = 1.0;
   double threshold_m = 0.03;
@@ -53,8 +61,29 @@ void runRpe(const EvalOptions& o) {
   std::printf("rotational_error.rmse_per_second %f deg/s\n", r.rotation_rmse_deg_per_s);
 }
 
+// The sheet's path is checked before any work: a PNG, not among the masks (it would be read as one
+// next time), not replacing a file unless asked to.
+void checkSheetPath(const EvalOptions& o) {
+  namespace fs = std::filesystem;
+  const fs::path sheet = fs::absolute(o.sheet).lexically_normal();
+  if (sheet.extension() != ".png") throw InputError(o.sheet + ": the contact sheet is written as PNG (name it .png)");
+  for (const std::string& masks : {o.gt, o.est})
+    if (fs::exists(masks) && fs::exists(sheet.parent_path()) && fs::equivalent(sheet.parent_path(), masks))
+      throw InputError(o.sheet + ": the contact sheet would lie among the masks of " + masks);
+  if (fs::exists(sheet) && !o.overwrite) throw InputError(o.sheet + ": exists (give --overwrite to replace it)");
+}
+
+void writeSheet(const EvalOptions& o, const eval::SegmentationResult& r) {
+  // In the TUM layout the ground-truth masks are the sequence's masks/ folder.
+  const std::string sequence =
+      o.sequence.empty() ? std::filesystem::absolute(o.gt).lexically_normal().parent_path().string() : o.sequence;
+  writePngAtomic(o.sheet, report::worstMaskSheet(sequence, r, o.sheet_options), "contact sheet");
+}
+
 void runSeg(const EvalOptions& o) {
+  if (!o.sheet.empty()) checkSheetPath(o);
   const auto r = eval::evaluateSegmentation(o.gt, o.est);
+  if (!o.sheet.empty()) writeSheet(o, r);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
     return;
@@ -109,7 +138,22 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
       "seg", "IoU, precision and recall of dynamic masks (<timestamp>.png, >127 = dynamic)");
   seg->add_option("GT_MASKS", opts->gt, "folder of ground-truth masks")->required();
   seg->add_option("EST_MASKS", opts->est, "folder of estimated masks")->required();
-  seg->add_flag("--json", opts->json, "print the result as JSON");
+  seg->add_flag("--json", opts->json, "print the result as JSON (with each frame's scores)");
+  seg->add_option("--sheet", opts->sheet,
+                  "also write a contact sheet (PNG) of the worst frames: colour, depth, true mask, estimate, both "
+                  "compared");
+  seg->add_option("--sheet-by", opts->sheet_options.by,
+                  "worst = most pixels wrong (wrong-pixels) or lowest IoU (iou); default wrong-pixels")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, report::WorstBy>{
+                                              {"wrong-pixels", report::WorstBy::kWrongPixels},
+                                              {"iou", report::WorstBy::kIou}},
+                                          CLI::ignore_case));
+  seg->add_option("--sheet-rows", opts->sheet_options.rows, "frames on the contact sheet")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  seg->add_option("--sequence", opts->sequence,
+                  "TUM folder of the masks' colour and depth images (default: the folder holding GT_MASKS)");
+  seg->add_flag("--overwrite", opts->overwrite, "replace an existing contact sheet");
   seg->callback([opts] { runSeg(*opts); });
 
   auto* map = eval->add_subcommand(

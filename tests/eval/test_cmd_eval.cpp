@@ -114,6 +114,49 @@ TEST(CmdEval, SegPrintsMeanAndPooledScores) {
   EXPECT_NEAR(valueAfter(r.output, "pooled_recall"), 0.5, 1e-6);
 }
 
+TEST(CmdEval, SegSheetShowsTheWorstFramesAndRefusesToOverwrite) {
+  namespace fs = std::filesystem;
+  ff::testing::TempDir dir;
+  const fs::path seq = ff::testing::makeTinySequence(dir.path() / "seq");
+  const fs::path gt_dir = seq / "masks", est_dir = dir.path() / "est";
+  fs::create_directories(gt_dir);
+  fs::create_directories(est_dir);
+  // First frame: a large mover half found (IoU 0.5, 768 pixels wrong). Second: a 2x2 px sliver
+  // missed (IoU 0, 4 pixels wrong).
+  cv::Mat gt1(48, 64, CV_8UC1, cv::Scalar(0)), est1 = gt1.clone(), gt2 = gt1.clone(), est2 = gt1.clone();
+  gt1(cv::Rect(0, 0, 32, 48)).setTo(255);
+  est1(cv::Rect(0, 0, 16, 48)).setTo(255);
+  gt2(cv::Rect(60, 0, 2, 2)).setTo(255);
+  cv::imwrite((gt_dir / "1.000000.png").string(), gt1);
+  cv::imwrite((est_dir / "1.000000.png").string(), est1);
+  cv::imwrite((gt_dir / "1.033333.png").string(), gt2);
+  cv::imwrite((est_dir / "1.033333.png").string(), est2);
+  const std::string sheet = (dir.path() / "sheet.png").string();
+  const std::string args = "eval seg " + gt_dir.string() + " " + est_dir.string() + " --sheet-rows 1 --sheet " + sheet;
+  // The comparison column at the first frame's missed half (x = 24 px of 64, scaled by 5).
+  const auto comparedPixel = [&] {
+    const cv::Mat img = cv::imread(sheet);
+    EXPECT_EQ(img.cols, 5 * 320);  // five columns, the 64x48 frames scaled to 320x240
+    EXPECT_GT(img.rows, 240);      // one row under the title strip
+    EXPECT_LT(img.rows, 2 * 240);
+    return img.empty() ? cv::Vec3b() : img.at<cv::Vec3b>(img.rows - 60, 4 * 320 + 120);
+  };
+  const auto r = runFlowfusion(args);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(comparedPixel(), cv::Vec3b(0, 0, 255));  // the most pixels wrong: the first frame, missed = red
+  ASSERT_EQ(runFlowfusion(args + " --overwrite --sheet-by iou").status, 0);
+  EXPECT_NE(comparedPixel(), cv::Vec3b(0, 0, 255));  // the lowest IoU: the second frame, static there
+
+  auto again = runFlowfusion(args);
+  EXPECT_EQ(again.status, 2);
+  EXPECT_NE(again.output.find("--overwrite"), std::string::npos) << again.output;
+  again = runFlowfusion("eval seg " + gt_dir.string() + " " + est_dir.string() + " --sheet " +
+                        (est_dir / "sheet.png").string());
+  EXPECT_EQ(again.status, 2);
+  EXPECT_NE(again.output.find("among the masks"), std::string::npos) << again.output;
+  EXPECT_FALSE(fs::exists(est_dir / "sheet.png"));
+}
+
 // ASCII PLY of a 10x10 grid of points 1 cm apart on z = 0, the first `lifted` of them 10 cm up.
 std::string writeGridPly(const std::filesystem::path& path, int lifted) {
   std::ofstream f(path);

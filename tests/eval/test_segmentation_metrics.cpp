@@ -85,6 +85,15 @@ TEST(EvaluateSegmentation, FoldersMatchedByTimestampWithMeanAndPooledScores) {
   EXPECT_EQ(r.pooled.true_positive, 70);
   EXPECT_NEAR(r.pooled.iou, 70.0 / 170.0, 1e-12);
   EXPECT_NEAR(r.pooled.precision, 70.0 / 120.0, 1e-12);
+  // Each pair with its scores, in time order.
+  ASSERT_EQ(r.per_frame.size(), 3u);
+  const double stamps[] = {100.0, 100.1, 100.2}, ious[] = {1.0 / 3, 1, 1};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(r.per_frame[k].timestamp, stamps[k]);
+    EXPECT_NEAR(r.per_frame[k].scores.iou, ious[k], 1e-12);
+  }
+  EXPECT_EQ(std::filesystem::path(r.per_frame[0].gt_path).filename(), "100.000000.png");
+  EXPECT_EQ(std::filesystem::path(r.per_frame[0].est_path).filename(), "100.005000.png");
 }
 
 TEST(EvaluateSegmentation, BadFoldersAreInputErrors) {

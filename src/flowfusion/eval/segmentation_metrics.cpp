@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -43,7 +44,9 @@ MaskFiles listMasks(const std::string& dir) {
   return m;
 }
 
-cv::Mat readMask(const std::string& path) {
+}  // namespace
+
+cv::Mat readMaskFile(const std::string& path) {
   const cv::Mat raw = readImageFile(path, cv::IMREAD_UNCHANGED, "mask image");
   if (raw.empty()) throw InputError(path + ": cannot read mask image");
   if (raw.depth() != CV_8U)
@@ -53,8 +56,6 @@ cv::Mat readMask(const std::string& path) {
   cv::cvtColor(raw, grey, raw.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
   return grey;
 }
-
-}  // namespace
 
 MaskScores scoresFromCounts(int64_t true_positive, int64_t false_positive, int64_t false_negative) {
   MaskScores s;
@@ -92,14 +93,16 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   const MaskFiles gt = listMasks(gt_dir);
   const MaskFiles est = listMasks(est_dir);
 
-  std::vector<std::pair<std::string, std::string>> pairs;  // (gt path, est path)
+  std::vector<FrameMaskScores> pairs;
   std::vector<double> gt_t, est_t;
   for (const auto& [t, p] : gt.stamped) gt_t.push_back(t);
   for (const auto& [t, p] : est.stamped) est_t.push_back(t);
   for (const auto& [i, j] : associateStamps(gt_t, est_t, kMaxStampDiffS))
-    pairs.emplace_back(gt.stamped[i].second, est.stamped[j].second);
+    pairs.push_back({gt.stamped[i].second, est.stamped[j].second, gt_t[i], {}});
+  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
+  const double no_stamp = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [stem, p] : gt.named)
-    if (const auto it = est.named.find(stem); it != est.named.end()) pairs.emplace_back(p, it->second);
+    if (const auto it = est.named.find(stem); it != est.named.end()) pairs.push_back({p, it->second, no_stamp, {}});
   if (pairs.empty())
     throw InputError(est_dir + ": no mask matches one in " + gt_dir +
                      " (names must be timestamps within 0.02 s of each other, or identical)");
@@ -110,8 +113,9 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   r.est_unmatched = est.stamped.size() + est.named.size() - pairs.size();
   int64_t tp = 0, fp = 0, fn = 0;
   double iou = 0, precision = 0, recall = 0;
-  for (const auto& [gp, ep] : pairs) {
-    const MaskScores s = compareMasks(readMask(gp), readMask(ep), gp, ep);
+  for (FrameMaskScores& pair : pairs) {
+    const MaskScores& s = pair.scores =
+        compareMasks(readMaskFile(pair.gt_path), readMaskFile(pair.est_path), pair.gt_path, pair.est_path);
     tp += s.true_positive;
     fp += s.false_positive;
     fn += s.false_negative;
@@ -124,6 +128,7 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   r.mean_precision = precision / n;
   r.mean_recall = recall / n;
   r.pooled = scoresFromCounts(tp, fp, fn);
+  r.per_frame = std::move(pairs);
   return r;
 }
 

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 namespace ff::eval {
 
@@ -20,6 +21,10 @@ struct MaskScores {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MaskScores, true_positive, false_positive, false_negative, iou, precision,
                                    recall)
 
+// A mask file read as 8-bit grey (colour masks are converted). InputError naming the file when it
+// cannot be read or is not 8-bit.
+cv::Mat readMaskFile(const std::string& path);
+
 // Scores from counts, with the 0/0 convention above.
 MaskScores scoresFromCounts(int64_t true_positive, int64_t false_positive, int64_t false_negative);
 
@@ -27,15 +32,24 @@ MaskScores scoresFromCounts(int64_t true_positive, int64_t false_positive, int64
 MaskScores compareMasks(const cv::Mat& gt, const cv::Mat& est, const std::string& gt_name = "ground-truth mask",
                         const std::string& est_name = "estimated mask");
 
+// One matched pair of masks and its scores.
+struct FrameMaskScores {
+  std::string gt_path, est_path;
+  double timestamp = 0;  // the ground-truth mask's timestamp (its name), s; NaN when the name is not a number
+  MaskScores scores;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FrameMaskScores, gt_path, est_path, timestamp, scores)
+
 struct SegmentationResult {
   size_t frames = 0;           // matched mask pairs
   size_t gt_unmatched = 0;     // ground-truth masks without an estimated mask
   size_t est_unmatched = 0;    // estimated masks without a ground-truth mask
   double mean_iou = 0, mean_precision = 0, mean_recall = 0;  // over frames
   MaskScores pooled;           // counts and scores over all pixels of all frames together
+  std::vector<FrameMaskScores> per_frame;  // the pairs, timestamped ones first, in time order
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SegmentationResult, frames, gt_unmatched, est_unmatched, mean_iou,
-                                   mean_precision, mean_recall, pooled)
+                                   mean_precision, mean_recall, pooled, per_frame)
 
 // Folders of <timestamp>.png masks. Files are matched by the timestamp in their names (nearest
 // within 0.02 s, each used once, as associate.py); names that are not numbers match by identical
