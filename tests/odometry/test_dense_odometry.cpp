@@ -321,6 +321,27 @@ TEST_F(DenseOdometryTest, PixelResidualsSkipWhereTheTargetIsWeightedOut) {
   EXPECT_EQ(cv::countNonZero(r.on_target_mover(right)), 0);
 }
 
+TEST_F(DenseOdometryTest, PixelResidualsWidenTheTargetsMoversByTheMargin) {
+  const auto c = config();
+  const SE3 T_world_ref = scene_->cameraPose(kRefFrame);
+  const OdometryFrame a = prepare(scene_->renderAt(T_world_ref, scene_->timestamp(kRefFrame)).frame, c);
+  cv::Mat w(a.level(0).depth.size(), CV_32F, cv::Scalar(1.0f));
+  const int edge = w.cols / 2;
+  w(cv::Rect(0, 0, edge, w.rows)).setTo(0.0f);
+  const cv::Mat weights = w.clone();
+  // The target is the source itself: each pixel lands on itself.
+  const auto onMover = [&](int margin, int column) {
+    const PixelResiduals r = computePixelResiduals(a, a, SE3::Identity(), 0, c, w, margin);
+    const cv::Mat col = r.on_target_mover(cv::Rect(column, 2, 1, w.rows - 4));
+    return cv::countNonZero(col == 1.f) / static_cast<double>(col.rows);
+  };
+  EXPECT_EQ(onMover(0, edge), 0.0);
+  EXPECT_GT(onMover(2, edge), 0.9);      // one and two pixels beside the mask: on the mover
+  EXPECT_GT(onMover(2, edge + 1), 0.9);
+  EXPECT_EQ(onMover(2, edge + 2), 0.0);  // beyond the margin: compared
+  EXPECT_EQ(cv::countNonZero(w != weights), 0);  // the caller's weights are left as they were
+}
+
 // A near occluder pasted into the target (half the depth, a flat grey) covers a quarter of the
 // view: the reference's pixels behind it are hidden in the target. They get no residuals and do
 // not take part in the alignment (OdometryConfig::occlusion_ratio).

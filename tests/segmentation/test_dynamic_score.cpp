@@ -330,6 +330,9 @@ TEST(DynamicScores, AClusterOnTheTargetsMoversIsDecidedByItsPriorUnlessItMovesOr
   EXPECT_LT(computeDynamicScores(g, r, cfg).b[2], 0.5f);
   cfg.target_mover_share = 1.5;
   EXPECT_THROW(validate(cfg), InputError);
+  cfg.target_mover_share = 0.5;
+  cfg.target_mover_margin_px = -1;
+  EXPECT_THROW(validate(cfg), InputError);
 }
 
 TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameDepth) {

@@ -493,10 +493,18 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
 
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& c,
-                                     const cv::Mat& target_weights) {
+                                     const cv::Mat& target_weights, int mover_margin_px) {
   const PyramidLevel& A = source.level(level);
   const PyramidLevel& B = target.level(level);
-  const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
+  cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
+  if (mover_margin_px > 0 && !wB.empty()) {
+    // The smallest weight within the margin: a mover's pixels spread over its outline.
+    // (Into a new image: wB may share the caller's weights.)
+    const int k = 2 * mover_margin_px + 1;
+    cv::Mat eroded;
+    cv::erode(wB, eroded, cv::Mat::ones(k, k, CV_8U));
+    wB = eroded;
+  }
   const TargetImages target_images(B, wB);
   const CameraIntrinsics& cam = A.camera;
   PixelResiduals out;

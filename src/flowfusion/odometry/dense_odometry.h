@@ -97,7 +97,9 @@ class DenseOdometry {
 // Per-pixel absolute residuals |r_I| ([0,1] units) and |r_D| (m) of the source frame's pixels at
 // pyramid `level` under T_target_source; NaN where a pixel has no valid warp, is hidden in the
 // target, or lands where target_weights is below 0.5 (a moving object there, not evidence of this
-// pixel's motion).
+// pixel's motion) or within mover_margin_px pixels (at `level`) of such a place: a mask's outline
+// is uncertain by about a pixel, and a surface landing just beside it would be compared with what
+// lies behind the mover.
 struct PixelResiduals {
   cv::Mat abs_intensity;    // CV_32F
   cv::Mat abs_depth;        // CV_32F
@@ -106,6 +108,6 @@ struct PixelResiduals {
 };
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& config,
-                                     const cv::Mat& target_weights = {});
+                                     const cv::Mat& target_weights = {}, int mover_margin_px = 0);
 
 }  // namespace ff

@@ -195,7 +195,8 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     {
       StageTimer timer(timings, "scores");
       const PixelResiduals pr = computePixelResiduals(in.cur, *in.target.odo, estimate.T_target_cur, level,
-                                                      config_.odometry, *in.target.weights);
+                                                      config_.odometry, *in.target.weights,
+                                                      config_.scores.target_mover_margin_px);
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;

@@ -153,6 +153,8 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
   if (!(c.target_mover_share >= 0 && c.target_mover_share <= 1))
     throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
+  if (!(c.target_mover_margin_px >= 0 && c.target_mover_margin_px <= 16))
+    throw InputError("scores.target_mover_margin_px must be in [0, 16] pixels (0 turns the margin off)");
 }
 
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,

@@ -63,12 +63,18 @@ struct ScoreConfig {
   // stands still: its neighbours and its carried score decide, unless its delta reaches theta_t
   // or it agrees with the map (docs/tuning.md#target_mover_share).
   double target_mover_share = 0.5;
+  // Pixels (at the segmentation level; our extension, 0 = off): a pixel landing this close to the
+  // target's movers counts as landing on them (computePixelResiduals' mover_margin_px). A static
+  // object scored dynamic in a keyframe keeps its own depth there; its edge, landing just outside
+  // that mask, would show the depth of the map behind it as motion and keep it dynamic
+  // (docs/tuning.md#target_mover_margin_px).
+  int target_mover_margin_px = 1;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
-                                                target_mover_share)
+                                                target_mover_share, target_mover_margin_px)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
