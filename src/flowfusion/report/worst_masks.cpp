@@ -17,7 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kColorStampS = 0.02;  // mask to colour image, as the masks' own association
-constexpr double kDepthStampS = 0.05;  // colour to depth image (TUM's are up to 20 ms apart)
+constexpr double kDepthStampS = 0.05;  // mask to depth image (TUM's lie up to 20 ms from the colour)
 
 using FileList = std::vector<std::pair<double, std::string>>;
 

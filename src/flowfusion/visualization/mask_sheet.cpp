@@ -12,6 +12,7 @@ namespace ff {
 namespace {
 
 constexpr int kTitleHeightPx = 28;
+constexpr int kColumns = 5;  // colour, depth, true mask, estimate, comparison
 constexpr double kDim = 0.5;  // how far the comparison dims the frame under its colours
 
 void checkRow(const MaskSheetRow& r, size_t index) {
@@ -50,8 +51,9 @@ cv::Mat scaled(const cv::Mat& image, int width_px, int interpolation) {
 }
 
 cv::Mat sheetRow(const MaskSheetRow& r, double max_depth_m, int width_px) {
-  const cv::Mat columns[] = {r.color, depthColormap(r.depth, max_depth_m), overlayMask(r.color, r.gt_mask > 127),
-                             overlayMask(r.color, r.est_mask > 127), maskComparison(r.color, r.gt_mask, r.est_mask)};
+  const cv::Mat columns[kColumns] = {r.color, depthColormap(r.depth, max_depth_m),
+                                     overlayMask(r.color, r.gt_mask > 127), overlayMask(r.color, r.est_mask > 127),
+                                     maskComparison(r.color, r.gt_mask, r.est_mask)};
   std::vector<cv::Mat> small;
   for (const cv::Mat& c : columns) small.push_back(scaled(c, width_px, cv::INTER_AREA));
   int line = 0;
@@ -69,9 +71,9 @@ cv::Mat titleStrip(int width_px, double max_depth_m, int column_width_px) {
   cv::Mat strip(kTitleHeightPx, width_px, CV_8UC3, cv::Scalar(40, 40, 40));
   char depth_title[64];
   std::snprintf(depth_title, sizeof depth_title, "depth 0-%.1f m (blue near)", max_depth_m);
-  const std::string titles[] = {"colour", depth_title, "true mask", "estimated mask",
-                                "green hit, red missed, blue false"};
-  for (int c = 0; c < 5; ++c) putLabel(strip, titles[c], cv::Point(c * column_width_px + 6, 19));
+  const std::string titles[kColumns] = {"colour", depth_title, "true mask", "estimated mask",
+                                        "green hit, red missed, blue false"};
+  for (int c = 0; c < kColumns; ++c) putLabel(strip, titles[c], cv::Point(c * column_width_px + 6, 19));
   return strip;
 }
 
@@ -105,7 +107,7 @@ cv::Mat maskContactSheet(const std::vector<MaskSheetRow>& rows, int column_width
   if (column_width_px < 64) throw InputError("mask sheet: the column width must be at least 64 px");
   for (size_t i = 0; i < rows.size(); ++i) checkRow(rows[i], i);
   const double max_depth_m = depthRange(rows);
-  std::vector<cv::Mat> strips{titleStrip(5 * column_width_px, max_depth_m, column_width_px)};
+  std::vector<cv::Mat> strips{titleStrip(kColumns * column_width_px, max_depth_m, column_width_px)};
   for (const MaskSheetRow& r : rows) strips.push_back(sheetRow(r, max_depth_m, column_width_px));
   cv::Mat sheet;
   cv::vconcat(strips, sheet);

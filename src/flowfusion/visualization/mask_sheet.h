@@ -2,7 +2,7 @@
 // Where dynamic masks fail, in pictures: a contact sheet with one row per frame showing the colour
 // image, its depth, the true mask, the estimated mask and the two compared (green where both are
 // dynamic, red where the estimate missed a dynamic pixel, blue where it marked a static one).
-// `flowfusion eval seg --sheet` fills it with the frames of lowest IoU (report/worst_masks.h).
+// `flowfusion eval seg --sheet` fills it with the worst frames (report/worst_masks.h).
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
