@@ -1,6 +1,9 @@
 // Output folders: --overwrite removes exactly what an earlier command wrote (its manifest) and
 // nothing of the user's; an output that is, contains or lies inside an input is refused.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -89,6 +92,47 @@ TEST(OutputFolder, OverlapWithAnInputIsRefused) {
             std::string::npos);
   EXPECT_NO_THROW(refuseOverlap((tmp.path() / "seq2").string(), seq.string(), what));
   EXPECT_NO_THROW(refuseOverlap((tmp.path() / "out").string(), seq.string(), what));
+}
+
+TEST(OutputFolder, AFolderLockedElsewhereIsRefusedUntilReleased) {
+  testing::TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  fs::create_directories(out);
+  // Another open file description, as another process would hold (flock locks are per open file).
+  const int other = ::open(out.c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(other, 0);
+  ASSERT_EQ(::flock(other, LOCK_EX | LOCK_NB), 0);
+  const std::string msg = testing::inputErrorOf([&] { prepareOutputDir(out.string(), true); });
+  EXPECT_NE(msg.find("another flowfusion command is writing into this output folder"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(out.string()), std::string::npos) << msg;
+  EXPECT_TRUE(fs::is_empty(out)) << "nothing written before the lock";
+  ::close(other);
+  prepareOutputDir(out.string(), false);
+  // This process holds it now: preparing it again is fine, another holder is refused.
+  prepareOutputDir(out.string(), true);
+  const int again = ::open(out.c_str(), O_RDONLY | O_DIRECTORY);
+  EXPECT_NE(::flock(again, LOCK_EX | LOCK_NB), 0);
+  releaseOutputDir();
+  EXPECT_EQ(::flock(again, LOCK_EX | LOCK_NB), 0);
+  ::close(again);
+}
+
+TEST(OutputFolder, AbandonLeavesNothingOfAFailedCommand) {
+  testing::TempDir tmp;
+  const fs::path out = tmp.path() / "new";
+  prepareOutputDir(out.string(), false);
+  writeFileAtomic((out / "rgb.txt").string(), "ours");
+  abandonOutputDir();
+  EXPECT_FALSE(fs::exists(out)) << "the folder it made goes too";
+  // A folder that existed stays, with the user's files.
+  fs::create_directories(out);
+  std::ofstream(out / "notes.txt") << "the user's";
+  prepareOutputDir(out.string(), true);
+  writeFileAtomic((out / "rgb.txt").string(), "ours");
+  abandonOutputDir();
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+  EXPECT_FALSE(fs::exists(out / "rgb.txt"));
+  EXPECT_FALSE(fs::exists(out / kManifestName));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "flowfusion/core/output_folder.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,12 +21,15 @@ namespace ff {
 
 namespace {
 
-// The folder whose writes are listed, and what its manifest lists already.
+// The folder whose writes are listed, what its manifest lists already, and its lock.
 struct Recording {
   std::mutex mutex;
   std::string command;  // setOutputCommand's, "" = not named
   fs::path dir;  // weakly canonical; empty = not recording
   std::set<std::string> listed;
+  bool created = false;  // prepareOutputDir made the folder
+  int lock_fd = -1;      // the folder opened and flock()ed, -1 = none held
+  fs::path locked_dir;   // weakly canonical
 };
 
 Recording& recording() {
@@ -92,30 +96,89 @@ void removeListedFiles(const fs::path& dir, const std::string& command) {
   fs::remove(manifest, ec);
 }
 
+// An exclusive lock on the folder itself, held while the returned descriptor is open; InputError
+// when another process holds it.
+int lockFolder(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw InputError(dir + ": cannot open the output folder: " + std::strerror(errno));
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return fd;
+  const int err = errno;
+  ::close(fd);
+  if (err == EWOULDBLOCK)
+    throw InputError(dir + ": another flowfusion command is writing into this output folder now; wait for it to "
+                           "end or choose another folder");
+  throw InputError(dir + ": cannot lock the output folder: " + std::strerror(err));
+}
+
+// Stops listing and releases the lock (the caller holds r.mutex).
+void release(Recording& r) {
+  if (r.lock_fd >= 0) ::close(r.lock_fd);
+  r.lock_fd = -1;
+  r.locked_dir.clear();
+  r.dir.clear();
+  r.listed.clear();
+  r.created = false;
+}
+
 }  // namespace
 
 void prepareOutputDir(const std::string& dir, bool overwrite) {
   if (dir.empty()) throw InputError("the output folder name is empty");
   Recording& r = recording();
-  const std::string command = [&r] {
-    const std::lock_guard<std::mutex> lock(r.mutex);
-    return r.command;
-  }();
   const fs::path p(dir);
   std::error_code ec;
-  if (fs::exists(p, ec)) {
-    if (!fs::is_directory(p, ec)) throw InputError(dir + ": output path exists and is not a folder");
-    if (!fs::is_empty(p, ec)) {
+  const bool existed = fs::exists(p, ec);
+  if (existed && !fs::is_directory(p, ec)) throw InputError(dir + ": output path exists and is not a folder");
+  fs::create_directories(p, ec);
+  if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
+  const fs::path canonical = fs::weakly_canonical(p);
+  std::string command;
+  int held = -1;
+  {
+    const std::lock_guard<std::mutex> lock(r.mutex);
+    command = r.command;
+    if (r.locked_dir == canonical) held = r.lock_fd;  // this process holds it already
+  }
+  const int fd = held >= 0 ? held : lockFolder(dir);
+  try {
+    if (existed && !fs::is_empty(p, ec)) {
       if (!overwrite) throw InputError(dir + ": output folder is not empty; choose another or pass --overwrite");
       removeListedFiles(p, command);
     }
+    writeFileAtomic((p / kManifestName).string(), kHeader + command + "\n", "manifest");
+  } catch (...) {
+    if (fd != held) ::close(fd);
+    throw;
   }
-  fs::create_directories(p, ec);
-  if (ec) throw InputError(dir + ": cannot create output folder: " + ec.message());
-  writeFileAtomic((p / kManifestName).string(), kHeader + command + "\n", "manifest");
   const std::lock_guard<std::mutex> lock(r.mutex);
-  r.dir = fs::weakly_canonical(p);
+  if (fd != held) {
+    release(r);
+    r.lock_fd = fd;
+    r.locked_dir = canonical;
+  }
+  r.dir = canonical;
   r.listed.clear();
+  r.created = !existed;
+}
+
+void releaseOutputDir() {
+  Recording& r = recording();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  release(r);
+}
+
+void abandonOutputDir() {
+  Recording& r = recording();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.dir.empty()) return;
+  std::error_code ec;
+  try {
+    removeListedFiles(r.dir, r.command);
+    if (r.created && fs::is_empty(r.dir, ec)) fs::remove(r.dir, ec);
+  } catch (const InputError&) {
+    // Nothing more to undo: the failure that led here is the one to report.
+  }
+  release(r);
 }
 
 void setOutputCommand(const std::string& command) {

@@ -3,7 +3,9 @@
 // inside an input, and --overwrite removes exactly the files a previous flowfusion command wrote
 // there, as listed in the folder's manifest (.flowfusion-manifest, one relative path per line,
 // appended as each file is written through core/atomic_file.h, so an interrupted command's files
-// are listed too), and nothing else.
+// are listed too), and nothing else. A command holds its output folder locked (flock on the folder
+// itself) from prepareOutputDir until it releases it or exits, so two commands never write into one
+// folder at once.
 #include <string>
 
 namespace ff {
@@ -19,7 +21,19 @@ void setOutputCommand(const std::string& command);
 // `overwrite` is set, and then the files its manifest lists are removed (with folders they leave
 // empty) while everything else stays (a folder without a manifest keeps all its files; those the
 // command writes again are replaced). A manifest written by another command is an InputError.
+// The folder is locked first: one another process holds is an InputError (the process keeps the
+// lock until releaseOutputDir(), the next prepareOutputDir() of another folder, or its exit).
 void prepareOutputDir(const std::string& dir, bool overwrite);
+
+// Ends the output of the folder prepareOutputDir prepared last: its writes are no longer listed
+// and its lock is released (for a library user who writes several outputs in one process).
+void releaseOutputDir();
+
+// For a command that failed before writing anything worth keeping: removes what it wrote into
+// the folder prepareOutputDir prepared last (the files its manifest lists, the folders they leave
+// empty, the manifest), and the folder itself when prepareOutputDir created it and it is left
+// empty, so that the failure leaves nothing that blocks a rerun; then releases it.
+void abandonOutputDir();
 
 // InputError when the output folder is, contains or lies inside `input` (a folder or a file;
 // `what` names it, e.g. "the input sequence"), compared after resolving links, "." and "..".
