@@ -3,8 +3,6 @@
 // marked partial result.
 #include <unistd.h>
 
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 
@@ -17,19 +15,10 @@
 #include "flowfusion/report/report_sink.h"
 #include "flowfusion/report/viewer_sink.h"
 #include "sequence_options.h"
+#include "stop_signals.h"
 
 namespace ff::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-std::atomic<int> g_signal{0};
-const char* g_reason = nullptr;
-
-void onSignal(int sig) {
-  g_reason = sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)";
-  g_signal = sig;
-  g_stop = true;
-}
 
 // "frame N/M" on a terminal.
 class ProgressSink : public ResultSink {
@@ -94,15 +83,12 @@ void execute(const RunCommand& c) {
   if (std::filesystem::is_directory(c.sequence)) report_options.sequence = c.sequence;
   report::ReportSink report(report_options);
   if (c.report) sinks.push_back(&report);  // after the files sink, whose files it reads
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
-  const RunSummary s = runSequence(*source, config, sinks, {&g_stop, &g_reason});
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  const StopSignals signals;
+  const RunSummary s = runSequence(*source, config, sinks, {signals.flag(), signals.reason()});
   if (!s.complete) {
     std::fprintf(stderr, "flowfusion: run stopped after %zu frames: %s; partial results in %s (summary.json says so)\n",
                  s.frames, s.stop_reason.c_str(), c.out.c_str());
-    throw ExitStatus{128 + g_signal.load()};
+    throw ExitStatus{signals.exitStatus()};
   }
   if (!c.quiet) printSummary(s, *source);
 }

@@ -3,12 +3,14 @@
 // the whole run on a bag (and on its `convert`ed folder) gives the folder's trajectory and masks;
 // bad bags give InputErrors that say what is wrong.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/bag_convert.h"
 #include "flowfusion/io/bag_source.h"
@@ -442,6 +444,154 @@ TEST(BagSource, OpenFrameSourceOpensBags) {
   const auto source = openFrameSource(path, bagOptions(), FrameRange{1, -1});
   EXPECT_EQ(source->name(), path);
   EXPECT_EQ(source->remaining(), folder().entries.size() - 1);
+}
+
+
+// Issue 30: `convert` gets the `run` treatment. A bag of the folder's frames repeated `frames`
+// times (stamps 1/30 s apart, LZ4), long enough for a signal to arrive while it converts.
+void writeLongBag(const std::string& path, size_t frames) {
+  const SynthFolder& f = folder();
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  bag.setCompression(rosbag::compression::LZ4);
+  BagSpec spec;
+  const double t0 = f.entries.front().rgb_timestamp;
+  for (size_t i = 0; i < frames; ++i) {
+    const FrameEntry& e = f.entries[i % f.entries.size()];
+    const ros::Time t = rosTime(t0 + static_cast<double>(i) / 30.0);
+    writeColor(bag, spec, t, t, cv::imread(e.rgb_path, cv::IMREAD_UNCHANGED));
+    writeDepth(bag, spec, t, cv::imread(e.depth_path, cv::IMREAD_UNCHANGED));
+  }
+  bag.close();
+}
+
+// A bag whose frame `bad` has a depth image of half the size (it fails when read).
+void writeBagWithBadFrame(const std::string& path, size_t bad) {
+  const SynthFolder& f = folder();
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  BagSpec spec, small;
+  small.depth_width = f.camera.width / 2;
+  for (size_t i = 0; i < f.entries.size(); ++i) {
+    const FrameEntry& e = f.entries[i];
+    const ros::Time t = rosTime(e.rgb_timestamp);
+    writeColor(bag, spec, t, t, cv::imread(e.rgb_path, cv::IMREAD_UNCHANGED));
+    writeDepth(bag, i == bad ? small : spec, t, cv::imread(e.depth_path, cv::IMREAD_UNCHANGED));
+  }
+  bag.close();
+}
+
+std::string convertCommand(const std::string& bag, const std::string& out, const std::string& more = "") {
+  return std::string(FLOWFUSION_APP_PATH) + " convert '" + bag + "' '" + out + "' --camera 100,100,79.5,59.5,160,120" +
+         more;
+}
+
+size_t filesIn(const fs::path& dir) {
+  return fs::is_directory(dir) ? static_cast<size_t>(std::distance(fs::directory_iterator(dir), {})) : 0;
+}
+
+// What a stopped conversion leaves: the frames written, each listed once, marked partial.
+void expectMarkedPartial(const fs::path& out, const std::string& reason, size_t min_frames, size_t max_frames) {
+  const nlohmann::json summary = readJsonFile((out / "summary.json").string());
+  EXPECT_FALSE(summary["complete"].get<bool>()) << summary.dump();
+  EXPECT_NE(summary["stop_reason"].get<std::string>().find(reason), std::string::npos) << summary.dump();
+  const size_t frames = summary["frames"].get<size_t>();
+  EXPECT_GE(frames, min_frames);
+  EXPECT_LE(frames, max_frames);
+  EXPECT_EQ(filesIn(out / "rgb"), frames);
+  EXPECT_EQ(filesIn(out / "depth"), frames);
+  EXPECT_EQ(TumSequence::open(out.string()).size(), frames) << "rgb.txt and depth.txt list the frames written";
+}
+
+void stopsWith(const std::string& signal, int status) {
+  ff::testing::TempDir tmp;
+  const std::string bag = (tmp.path() / "long.bag").string(), out = (tmp.path() / "out").string();
+  constexpr size_t kFrames = 600;
+  writeLongBag(bag, kFrames);
+  const std::string script = convertCommand(bag, out) + " & pid=$!; for i in $(seq 600); do n=$(ls " + out +
+                             "/rgb 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.02; done; kill -" +
+                             signal + " $pid; wait $pid";
+  const auto r = ff::testing::runShell(script);
+  EXPECT_EQ(r.status, status) << r.output;
+  EXPECT_NE(r.output.find("convert stopped after"), std::string::npos) << r.output;
+  expectMarkedPartial(out, "SIG" + signal, 3, kFrames - 1);
+  // The rerun replaces it with the whole conversion.
+  const auto again = ff::testing::runShell(convertCommand(bag, out, " --overwrite"));
+  EXPECT_EQ(again.status, 0) << again.output;
+  const nlohmann::json summary = readJsonFile(out + "/summary.json");
+  EXPECT_TRUE(summary["complete"].get<bool>());
+  EXPECT_EQ(summary["frames"].get<size_t>(), kFrames);
+  EXPECT_EQ(TumSequence::open(out).size(), kFrames);
+}
+
+TEST(BagConvert, SigintLeavesAMarkedPartialResultAndARerunWorks) { stopsWith("INT", 130); }
+
+TEST(BagConvert, SigtermDoesTheSame) { stopsWith("TERM", 143); }
+
+TEST(BagConvert, AFrameFailingMidBagLeavesAMarkedPartialResult) {
+  ff::testing::TempDir tmp;
+  const std::string bag = (tmp.path() / "bad5.bag").string();
+  writeBagWithBadFrame(bag, 5);
+  const fs::path out = tmp.path() / "out";
+  const auto r = ff::testing::runShell(convertCommand(bag, out.string()));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("80x60"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the 5 frames before it are in " + out.string() + ", marked partial"), std::string::npos)
+      << r.output;
+  expectMarkedPartial(out, "80x60", 5, 5);
+}
+
+TEST(BagConvert, AnEarlyFailureLeavesNothingAndTheRerunWorks) {
+  ff::testing::TempDir tmp;
+  const std::string bad = (tmp.path() / "bad0.bag").string(), good = (tmp.path() / "good.bag").string();
+  writeBagWithBadFrame(bad, 0);
+  writeBag(good, BagSpec{});
+  const fs::path out = tmp.path() / "out";
+  const auto r = ff::testing::runShell(convertCommand(bad, out.string()));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_FALSE(fs::exists(out)) << "nothing to keep, nothing to block the rerun";
+  // Ground truth and options are checked before the first frame: nothing is written.
+  const std::string missing = (tmp.path() / "missing.txt").string();
+  for (const std::string more : {" --groundtruth " + missing, std::string(" --depth-scale 1e-30"),
+                                 std::string(" --depth-scale inf"), std::string(" --depth-scale nan")}) {
+    const auto early = ff::testing::runShell(convertCommand(good, out.string(), more));
+    EXPECT_EQ(early.status, 2) << more << ": " << early.output;
+    EXPECT_NE(early.output.find(more.substr(1, more.find(' ', 1) - 1)), std::string::npos) << early.output;
+    EXPECT_FALSE(fs::exists(out)) << more;
+  }
+  const auto rerun = ff::testing::runShell(convertCommand(good, out.string(), " --groundtruth " + folder().groundtruth()));
+  EXPECT_EQ(rerun.status, 0) << rerun.output;
+  EXPECT_TRUE(readJsonFile((out / "summary.json").string())["complete"].get<bool>());
+  EXPECT_TRUE(fs::exists(out / "groundtruth.txt"));
+}
+
+TEST(BagConvert, ABagThatIsAFolderOrAFifoOrMixesImageTypesSaysSo) {
+  ff::testing::TempDir tmp;
+  const fs::path folder_bag = tmp.path() / "walk.bag", fifo = tmp.path() / "pipe.bag";
+  fs::create_directories(folder_bag);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(inputErrorOf([&] { openFrameSource(folder_bag.string(), bagOptions()); }).find("is a folder, not a ROS bag"),
+            std::string::npos);
+  EXPECT_NE(inputErrorOf([&] { openFrameSource(fifo.string(), bagOptions()); }).find("is not a regular file"),
+            std::string::npos);
+  // One colour topic with both sensor_msgs/Image and CompressedImage messages.
+  const std::string mixed = (tmp.path() / "mixed.bag").string();
+  {
+    const SynthFolder& f = folder();
+    rosbag::Bag bag(mixed, rosbag::bagmode::Write);
+    BagSpec raw, png;
+    png.color = "png";
+    for (size_t i = 0; i < f.entries.size(); ++i) {
+      const FrameEntry& e = f.entries[i];
+      const ros::Time t = rosTime(e.rgb_timestamp);
+      writeColor(bag, i % 2 ? png : raw, t, t, cv::imread(e.rgb_path, cv::IMREAD_UNCHANGED));
+      writeDepth(bag, raw, t, cv::imread(e.depth_path, cv::IMREAD_UNCHANGED));
+    }
+    bag.close();
+  }
+  const std::string message = inputErrorOf([&] { BagSource bag(mixed, bagOptions()); });
+  EXPECT_NE(message.find("/camera/rgb/image_color message 1 does not decode as the topic's sensor_msgs/Image"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("mixes sensor_msgs/Image and CompressedImage"), std::string::npos) << message;
 }
 
 #endif  // FLOWFUSION_HAVE_ROSBAG

@@ -71,5 +71,38 @@ TEST(CliErrors, NoIntrinsics) {
   EXPECT_NE(r.output.find("--camera"), std::string::npos) << r.output;
 }
 
+TEST(CliErrors, NonFiniteOrAbsurdDepthScaleIsRefusedByName) {
+  testing::TempDir tmp;
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
+  for (const std::string scale : {"inf", "nan", "1e-30", "0", "-5000", "1e9"}) {
+    const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
+                                          " --depth-scale " + scale);
+    EXPECT_EQ(r.status, 2) << scale << ": " << r.output;
+    EXPECT_NE(r.output.find("--depth-scale"), std::string::npos) << scale << ": " << r.output;
+    EXPECT_FALSE(fs::exists(tmp.path() / "out")) << scale;
+  }
+  EXPECT_EQ(testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
+                                   " --quiet --no-map --depth-scale 1000")
+                .status,
+            0);
+}
+
+// `report` on a folder whose summary.json is not an object, and with a bad --max-points.
+TEST(CliErrors, ReportOnAMalformedSummaryOrBadMaxPoints) {
+  testing::TempDir tmp;
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
+  const fs::path out = tmp.path() / "out";
+  ASSERT_EQ(testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(out) + " --quiet --no-map").status, 0);
+  const auto bad_points = testing::runFlowfusion("report " + shellArg(out) + " --max-points -1");
+  EXPECT_NE(bad_points.status, 0) << bad_points.output;
+  EXPECT_NE(bad_points.output.find("--max-points"), std::string::npos) << bad_points.output;
+  EXPECT_FALSE(fs::exists(out / "report.html"));
+  std::ofstream(out / "summary.json") << "[1, 2, 3]\n";
+  const auto array = testing::runFlowfusion("report " + shellArg(out));
+  EXPECT_EQ(array.status, 2) << array.output;
+  EXPECT_NE(array.output.find("summary.json: expected a JSON object"), std::string::npos) << array.output;
+  EXPECT_EQ(array.output.find("internal error"), std::string::npos) << array.output;
+}
+
 }  // namespace
 }  // namespace ff

@@ -1,11 +1,16 @@
 #include "flowfusion/io/bag_convert.h"
 
 #include <cstdio>
+#include <exception>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "flowfusion/core/atomic_file.h"
+#include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/output_folder.h"
 #include "flowfusion/io/bag_reader.h"
 
 namespace fs = std::filesystem;
@@ -54,38 +59,93 @@ void writeCamera(const fs::path& file, const CameraModel& camera) {
   writeFileAtomic(file.string(), out.str(), "camera file");
 }
 
+// The ground truth to copy, read first so that a bad one is refused before any frame.
+std::optional<std::string> groundtruthText(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError("--groundtruth " + path + ": no such file");
+  readTrajectory(path);  // refuses a file that is not a TUM trajectory
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in.is_open()) throw InputError("--groundtruth " + path + ": cannot read it");
+  return text.str();
+}
+
+// One frame's two images, their folders made on the first.
+void writeFrame(const fs::path& root, const BagFrame& f, BagConversion& report,
+                std::vector<std::pair<double, std::string>>& rgb, std::vector<std::pair<double, std::string>>& depth) {
+  if (rgb.empty()) {
+    fs::create_directories(root / "rgb");
+    fs::create_directories(root / "depth");
+  }
+  const std::string color_file = "rgb/" + timestampName(f.timestamp) + ".png";
+  const std::string depth_file = "depth/" + timestampName(f.depth_timestamp) + ".png";
+  writePngAtomic((root / color_file).string(), f.bgr8, "colour image");
+  writePngAtomic((root / depth_file).string(), tumDepth(f.depth, f.depth_scale, report.saturated_pixels),
+                 "depth image");
+  rgb.emplace_back(f.timestamp, color_file);
+  depth.emplace_back(f.depth_timestamp, depth_file);
+  ++report.frames;
+}
+
+void writeSummary(const fs::path& root, const std::string& bag_path, const BagConversion& report) {
+  nlohmann::json j;
+  j["command"] = "convert";
+  j["bag"] = bag_path;
+  j["complete"] = report.complete;
+  if (!report.complete) j["stop_reason"] = report.stop_reason;
+  j["frames"] = report.frames;
+  j["color_topic"] = report.color_topic;
+  j["depth_topic"] = report.depth_topic;
+  j["saturated_depth_pixels"] = report.saturated_pixels;
+  writeJsonFile((root / "summary.json").string(), j);
+}
+
 }  // namespace
 
 BagConversion convertBagToTum(const std::string& bag_path, const std::string& out_dir,
-                              const SequenceOptions& options, bool overwrite) {
+                              const SequenceOptions& options, bool overwrite, const std::atomic<bool>* stop,
+                              const char* const* reason) {
+  const std::optional<std::string> groundtruth = groundtruthText(options.groundtruth);
   BagReader reader = BagReader::open(bag_path, options);
   prepareOutputDir(out_dir, overwrite);
   const fs::path root(out_dir);
-  fs::create_directories(root / "rgb");
-  fs::create_directories(root / "depth");
   BagConversion report{0, 0, reader.colorTopic(), reader.depthTopic()};
   std::vector<std::pair<double, std::string>> rgb, depth;
-  for (size_t i = 0; i < reader.size(); ++i) {
-    const BagFrame f = reader.read(i);
-    const std::string color_file = "rgb/" + timestampName(f.timestamp) + ".png";
-    const std::string depth_file = "depth/" + timestampName(f.depth_timestamp) + ".png";
-    writePngAtomic((root / color_file).string(), f.bgr8, "colour image");
-    writePngAtomic((root / depth_file).string(), tumDepth(f.depth, f.depth_scale, report.saturated_pixels),
-                   "depth image");
-    rgb.emplace_back(f.timestamp, color_file);
-    depth.emplace_back(f.depth_timestamp, depth_file);
-    ++report.frames;
+  std::exception_ptr failure;
+  for (size_t i = 0; i < reader.size() && !failure; ++i) {
+    if (stop && stop->load()) {
+      report.complete = false;
+      report.stop_reason = reason && *reason ? *reason : "stopped";
+      break;
+    }
+    try {
+      writeFrame(root, reader.read(i), report, rgb, depth);
+    } catch (const std::exception& e) {
+      if (report.frames == 0) {  // nothing worth keeping, and nothing left to block a rerun
+        std::error_code ec;
+        for (const char* folder : {"rgb", "depth"}) fs::remove(root / folder, ec);  // only when empty
+        abandonOutputDir();
+        throw;
+      }
+      report.complete = false;
+      report.stop_reason = e.what();
+      failure = std::current_exception();
+    }
   }
   writeList(root / "rgb.txt", "color images", bag_path + " " + reader.colorTopic(), rgb);
   writeList(root / "depth.txt", "depth maps", bag_path + " " + reader.depthTopic(), depth);
   writeCamera(root / "camera.txt", reader.camera());
-  if (!options.groundtruth.empty()) {
-    readTrajectory(options.groundtruth);  // refuses a file that is not a TUM trajectory
-    std::error_code ec;
-    fs::copy_file(options.groundtruth, root / "groundtruth.txt", fs::copy_options::overwrite_existing, ec);
-    if (ec) throw InputError(out_dir + ": cannot write groundtruth.txt: " + ec.message());
+  if (groundtruth) writeFileAtomic((root / "groundtruth.txt").string(), *groundtruth, "groundtruth.txt");
+  writeSummary(root, bag_path, report);
+  if (!failure) return report;
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + "; the " + std::to_string(report.frames) + " frames before it are in " +
+                     out_dir + ", marked partial in its summary.json");
   }
-  return report;
 }
 
 }  // namespace ff

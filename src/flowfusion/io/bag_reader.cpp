@@ -114,6 +114,17 @@ class TopicCursor {
   size_t pos_ = 0;
 };
 
+// InputError unless `path` is a regular file (a folder or a FIFO would only fail later as "corrupt").
+void requireBagFile(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!fs::exists(st)) throw InputError(path + ": bag file does not exist");
+  if (fs::is_directory(st)) throw InputError(path + ": is a folder, not a ROS bag file (a TUM-layout folder must not end in .bag)");
+  if (!fs::is_regular_file(st))
+    throw InputError(path + ": is not a regular file (a FIFO, socket or device); a ROS bag is read from a file on disk");
+}
+
 }  // namespace
 
 bool bagSupportBuilt() { return true; }
@@ -148,10 +159,15 @@ void BagReader::Impl::pickTopics() {
     if (isImageTopic(*c)) images.push_back(c);
   }
   if (listing.empty()) listing = " none";
+  // A topic's message type; a topic recorded with both image types is refused by name.
   const auto typeOf = [&](const std::string& topic) -> std::string {
+    std::string type;
     for (const auto* c : images)
-      if (c->topic == topic) return c->datatype;
-    return "";
+      if (c->topic == topic && type.empty()) type = c->datatype;
+      else if (c->topic == topic && c->datatype != type)
+        fail(topic + ": holds both " + type + " and " + c->datatype + " messages; a colour or depth topic must carry "
+             "one message type (choose another topic with --rgb-topic / --depth-topic)");
+    return type;
   };
   const auto choose = [&](const std::string& given, const std::vector<std::string>& known, bool depth,
                           const std::string& what, const std::string& flag) {
@@ -191,14 +207,19 @@ void BagReader::Impl::readStamps() {
     std::vector<double>& out = is_color ? color_stamps : depth_stamps;
     double t;
     std::string encoding;
-    if (type == kImageType) {
-      const auto msg = instantiate<ImageMsg>(m, path + ":" + topic);
-      t = seconds(msg->header.stamp);
-      encoding = str(msg->encoding);
-    } else {
-      const auto msg = instantiate<CompressedMsg>(m, path + ":" + topic);
-      t = seconds(msg->header.stamp);
-      encoding = str(msg->format);
+    try {
+      if (type == kImageType) {
+        const auto msg = instantiate<ImageMsg>(m, path + ":" + topic);
+        t = seconds(msg->header.stamp);
+        encoding = str(msg->encoding);
+      } else {
+        const auto msg = instantiate<CompressedMsg>(m, path + ":" + topic);
+        t = seconds(msg->header.stamp);
+        encoding = str(msg->format);
+      }
+    } catch (const ros::Exception& e) {
+      fail(topic + " message " + std::to_string(out.size()) + " does not decode as the topic's " + type + " (" +
+           e.what() + "): the topic mixes sensor_msgs/Image and CompressedImage messages, or the bag is corrupt");
     }
     if (const std::string problem = encodingProblem(type, encoding, is_color ? Kind::kColor : Kind::kDepth);
         !problem.empty())
@@ -353,8 +374,8 @@ BagReader& BagReader::operator=(BagReader&&) noexcept = default;
 BagReader::~BagReader() = default;
 
 BagReader BagReader::open(const std::string& path, const SequenceOptions& options) {
-  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": bag file does not exist");
-  if (!(options.bag_depth_scale > 0)) throw InputError("bag depth scale must be positive");
+  requireBagFile(path);
+  checkDepthScale(options.bag_depth_scale, "--depth-scale");
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->options = options;

@@ -58,12 +58,21 @@ void writeCameraFile(const std::string& path, const CameraIntrinsics& c) {
   writeFileAtomic(path, out.str(), "camera file");
 }
 
+void checkDepthScale(double units_per_metre, const std::string& name) {
+  constexpr double kMin = 100, kMax = 65535;
+  if (units_per_metre >= kMin && units_per_metre <= kMax) return;  // NaN fails both comparisons
+  char given[32];
+  std::snprintf(given, sizeof given, "%g", units_per_metre);
+  throw InputError(name + ": " + given + " is not a finite number of raw depth units per metre in [100, 65535] " +
+                   "(1000 = millimetres, 5000 = TUM)");
+}
+
 TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& options) {
   if (!fs::is_directory(dir)) throw InputError(dir + ": sequence folder does not exist");
   TumSequence s;
   s.dir_ = dir;
   s.options_ = options;
-  if (!(options.depth_scale > 0)) throw InputError("depth scale must be positive");
+  checkDepthScale(options.depth_scale, "--depth-scale");
 
   const fs::path root(dir);
   if (!options.camera.empty()) {

@@ -30,6 +30,11 @@ struct SequenceOptions {
   std::string groundtruth;
 };
 
+// Raw 16-bit depth units per metre within what a depth sensor's images can mean (100: centimetres,
+// 1000: millimetres, 5000: TUM, up to 65535, one metre at the 16-bit limit); InputError naming
+// `name` (the option or argument) for a non-finite or absurd scale.
+void checkDepthScale(double units_per_metre, const std::string& name);
+
 struct FrameEntry {
   double rgb_timestamp = 0;    // s
   std::string rgb_path;        // absolute or relative to the working directory
@@ -58,6 +63,8 @@ class TumSequence {
   const LensDistortion& distortion() const { return camera_.distortion; }
   // Set when frames are undistorted on loading: takes per-frame outputs back to raw pixels.
   const Undistorter* undistorter() const { return undistorter_.get(); }
+  // The same, shared with what outlives the sequence (a frame handed to Python).
+  std::shared_ptr<const Undistorter> sharedUndistorter() const { return undistorter_; }
   const std::string& dir() const { return dir_; }
   const std::optional<Trajectory>& groundtruth() const { return groundtruth_; }
   // masks/ folder when the sequence carries ground-truth dynamic masks.
