@@ -124,6 +124,38 @@ TEST(DatasetLayout, Eth3dReadsCalibrationTxtAndTheImageSize) {
   }
 }
 
+TEST(DatasetLayout, IclNuimWithTwoTrajectoriesNamesThemRatherThanDroppingGroundTruth) {
+  ff::testing::TempDir tmp;
+  const fs::path root = tmp.path() / "living_room_traj0_frei_png";
+  writeImages(root, {"0", "1"}, 640, 480);
+  writeText(root / "associations.txt", "0 depth/0.png 0 rgb/0.png\n1 depth/1.png 1 rgb/1.png\n");
+  writeText(root / "livingRoom0.gt.freiburg", "0 0 0 0 0 0 0 1\n1 0.01 0 0 0 0 0 1\n");
+  writeText(root / "livingRoom1.gt.freiburg", "0 0 0 0 0 0 0 1\n1 0.03 0 0 0 0 0 1\n");
+  const std::string message = testing::inputErrorOf([&] { TumSequence::open(root.string()); });
+  EXPECT_NE(message.find("2 ground-truth trajectories"), std::string::npos) << message;
+  EXPECT_NE(message.find("livingRoom0.gt.freiburg"), std::string::npos) << message;
+  EXPECT_NE(message.find("livingRoom1.gt.freiburg"), std::string::npos) << message;
+  // groundtruth.txt says which one.
+  writeText(root / "groundtruth.txt", "0 0 0 0 0 0 0 1\n1 0.03 0 0 0 0 0 1\n");
+  const TumSequence s = TumSequence::open(root.string());
+  ASSERT_TRUE(s.groundtruth().has_value());
+  EXPECT_DOUBLE_EQ(s.groundtruth()->at(1).T_world_cam.translation().x(), 0.03);
+}
+
+TEST(DatasetLayout, Eth3dWithAssociationsTakesItsSizeFromTheFirstImage) {
+  ff::testing::TempDir tmp;
+  const fs::path root = tmp.path() / "table_3";
+  writeImages(root, {"0", "1"}, 640, 480);
+  writeText(root / "associations.txt", "0 rgb/0.png 0 depth/0.png\n1 rgb/1.png 1 depth/1.png\n");
+  writeText(root / "calibration.txt", "726.2 726.2 319.5 239.5\n");
+  const auto d = detectDataset(root.string());
+  ASSERT_TRUE(d.has_value());
+  expectCamera(*d, Dataset::kEth3d, {726.2, 726.2, 319.5, 239.5, 640, 480});
+  const TumSequence s = TumSequence::open(root.string());
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_EQ(s.load(1).depth.cols, 640);
+}
+
 TEST(DatasetLayout, CameraTxtAndCameraOverrideTheDataset) {
   ff::testing::TempDir tmp;
   const fs::path root = tmp.path() / "rgbd_bonn_crowd";

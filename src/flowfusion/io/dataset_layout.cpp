@@ -1,5 +1,6 @@
 #include "flowfusion/io/dataset_layout.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <regex>
 #include <sstream>
@@ -28,16 +29,13 @@ constexpr int kEth3dWidth = 739, kEth3dHeight = 458;
 
 std::string folderName(const std::string& dir) { return fs::weakly_canonical(fs::path(dir)).filename().string(); }
 
-std::optional<std::string> iclGroundtruth(const std::string& dir) {
-  std::optional<std::string> found;
+// ICL-NUIM's trajectories (*.gt.freiburg) in the folder, sorted.
+std::vector<std::string> iclGroundtruthFiles(const std::string& dir) {
+  std::vector<std::string> found;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string n = e.path().filename().string();
-    if (n.ends_with(".gt.freiburg")) {
-      if (found) return std::nullopt;  // ambiguous: more than one trajectory
-      found = e.path().string();
-    }
-  }
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().filename().string().ends_with(".gt.freiburg")) found.push_back(e.path().string());
+  std::sort(found.begin(), found.end());
   return found;
 }
 
@@ -46,7 +44,7 @@ bool isIclFolder(const std::string& dir) {
   if (std::regex_search(folderName(dir), std::regex("^((living_?room|office_?room)_?)?traj[0-3]|^(lr|of)_?kt[0-3]",
                                                     std::regex::icase)))
     return true;
-  return iclGroundtruth(dir).has_value() ||
+  return !iclGroundtruthFiles(dir).empty() ||
          (fs::exists(root / "associations.txt") && !fs::exists(root / "rgb.txt") && fs::is_directory(root / "rgb") &&
           fs::is_directory(root / "depth"));
 }
@@ -60,8 +58,8 @@ DatasetCamera eth3dCamera(const std::string& dir) {
   for (double x; nums >> x;) v.push_back(x);
   if (!nums.eof() || v.size() != 4) in.malformed();
   cv::Size size(kEth3dWidth, kEth3dHeight);
-  if (fs::exists(fs::path(dir) / "rgb.txt")) {
-    const auto rgb = readFileList((fs::path(dir) / "rgb.txt").string());
+  if (fs::exists(fs::path(dir) / "rgb.txt") || fs::exists(fs::path(dir) / "associations.txt")) {
+    const auto rgb = readDatasetLists(dir).rgb;
     if (const auto s = readPngSize((fs::path(dir) / rgb.front().second).string())) size = *s;
   }
   v.push_back(size.width);
@@ -125,7 +123,12 @@ FileLists readDatasetLists(const std::string& dir) {
 std::optional<std::string> datasetGroundtruthFile(const std::string& dir) {
   const fs::path gt = fs::path(dir) / "groundtruth.txt";
   if (fs::exists(gt)) return gt.string();
-  return iclGroundtruth(dir);
+  const std::vector<std::string> icl = iclGroundtruthFiles(dir);
+  if (icl.size() > 1)
+    throw InputError(dir + ": " + std::to_string(icl.size()) + " ground-truth trajectories (" + icl[0] + ", " + icl[1] +
+                     (icl.size() > 2 ? ", ..." : "") + "); keep one *.gt.freiburg or copy the right one to groundtruth.txt");
+  if (icl.empty()) return std::nullopt;
+  return icl.front();
 }
 
 }  // namespace ff

@@ -29,7 +29,7 @@ std::optional<DatasetCamera> datasetCameraFromName(const std::string& name);
 // By a folder's name and contents: the names above; ICL-NUIM's TUM-compatible folders
 // (associations.txt with rgb/ and depth/, a *.gt.freiburg trajectory, or a name
 // living_room_traj*, office_room_traj*, traj*_frei_png); ETH3D SLAM (calibration.txt "fx fy cx
-// cy", the size from the first colour image). Throws InputError on an unreadable calibration.txt.
+// cy", the size from the first colour image of rgb.txt or associations.txt). Throws InputError on an unreadable calibration.txt.
 std::optional<DatasetCamera> detectDataset(const std::string& dir);
 
 // What detectDataset looks for and how else to give the camera, for the error when none applies.
@@ -44,7 +44,8 @@ struct FileLists {
 };
 FileLists readDatasetLists(const std::string& dir);
 
-// The folder's ground-truth trajectory file: groundtruth.txt, or ICL-NUIM's single *.gt.freiburg.
+// The folder's ground-truth trajectory file: groundtruth.txt, or ICL-NUIM's single *.gt.freiburg
+// (InputError naming them when there are several and no groundtruth.txt says which).
 std::optional<std::string> datasetGroundtruthFile(const std::string& dir);
 
 }  // namespace ff
