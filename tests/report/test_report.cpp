@@ -152,6 +152,32 @@ TEST_F(SyntheticRunReport, HoldsTheRunsFiguresAgainstGroundTruth) {
 
 // Nothing outside the verbatim library (between its markers; the page's Content-Security-Policy
 // forbids its requests too) names an http(s) address.
+// Issue 30, case 9: ground truth the report cannot use is said so, not dropped without a word.
+TEST_F(SyntheticRunReport, SaysWhenItCannotUseTheGroundTruth) {
+  const fs::path copy = dir_->path() / "copy", other = dir_->path() / "other";
+  fs::copy(dir_->path() / "out", copy, fs::copy_options::recursive);
+  fs::create_directories(other);
+  fs::copy_file(dir_->path() / "seq" / "rgb.txt", other / "rgb.txt");
+  std::ofstream(other / "groundtruth.txt") << "5000.0 0 0 0 0 0 0 1\n5000.1 0 0 0 0 0 0 1\n5000.2 0 0 0 0 0 0 1\n";
+  auto r = testing::runFlowfusion("report " + copy.string() + " --sequence " + other.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("note: the ground truth and the estimate share fewer than 3 timestamps"), std::string::npos)
+      << r.output;
+  // From another folder: summary.json names the sequence by its absolute path, so it is found.
+  r = testing::runShell("cd / && " + std::string(FLOWFUSION_APP_PATH) + " report " + copy.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.find("note:"), std::string::npos) << r.output;
+  // An older summary.json with a relative path, read from elsewhere: said so.
+  nlohmann::json summary = readJsonFile((copy / "summary.json").string());
+  EXPECT_TRUE(fs::path(summary["sequence"].get<std::string>()).is_absolute()) << summary.dump();
+  summary["sequence"] = "seq";
+  writeJsonFile((copy / "summary.json").string(), summary);
+  r = testing::runShell("cd / && " + std::string(FLOWFUSION_APP_PATH) + " report " + copy.string());
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("note: the sequence folder summary.json names (seq) is not here"), std::string::npos)
+      << r.output;
+}
+
 TEST_F(SyntheticRunReport, NamesNoNetworkAddress) {
   std::string text = readText(html());
   const size_t a = text.find("/*ff-lib-begin*/"), b = text.find("/*ff-lib-end*/");

@@ -112,7 +112,10 @@ FilesSink::~FilesSink() = default;
 
 void FilesSink::begin(const RunInfo& info) {
   source_ = info.frames;
-  source_name_ = info.source;
+  // Absolute, so that `report` finds the sequence from any folder.
+  std::error_code ec;
+  source_name_ = info.frames && fs::exists(info.source, ec) ? fs::absolute(info.source).lexically_normal().string()
+                                                             : info.source;
   prepareOutputDir(options_.out_dir, options_.overwrite);
   const fs::path out(options_.out_dir);
   writeJsonFile((out / "config.json").string(), nlohmann::json(info.config));

@@ -81,16 +81,38 @@ void addSegmentation(const fs::path& run, const std::string& sequence, nlohmann:
   headline["seg_frames"] = seg.frames;
 }
 
+// The run's summary.json (an empty object when there is none); InputError unless it is an object.
+nlohmann::json readSummary(const fs::path& path) {
+  if (!fs::exists(path)) return nlohmann::json::object();
+  nlohmann::json summary = readJsonFile(path.string());
+  if (!summary.is_object())
+    throw InputError(path.string() + ": expected a JSON object (the summary `flowfusion run` writes), got " +
+                     summary.type_name());
+  return summary;
+}
+
+// What the page says is missing, for the command to say too.
+std::vector<std::string> missingParts(const nlohmann::json& summary, const nlohmann::json& headline,
+                                      const std::string& sequence, bool has_gt) {
+  std::vector<std::string> notes;
+  const std::string named = summary.value("sequence", std::string());
+  if (sequence.empty() && !named.empty())
+    notes.push_back("the sequence folder summary.json names (" + named +
+                    ") is not here: no colour frames or ground truth (give --sequence)");
+  if (!sequence.empty() && !has_gt) notes.push_back(sequence + " holds no groundtruth.txt: no trajectory error");
+  if (headline.contains("ate_note")) notes.push_back(headline["ate_note"].get<std::string>() + ": no trajectory error");
+  return notes;
+}
+
 }  // namespace
 
-std::string writeReport(const ReportOptions& o) {
+std::string writeReport(const ReportOptions& o, std::vector<std::string>* notes) {
   const fs::path run(o.run_dir);
   if (!fs::is_directory(run)) throw InputError(o.run_dir + ": run folder does not exist");
   const fs::path traj_path = run / "trajectory.txt";
   if (!fs::exists(traj_path))
     throw InputError(traj_path.string() + " is missing: give the folder `flowfusion run --out` wrote");
-  const nlohmann::json summary =
-      fs::exists(run / "summary.json") ? readJsonFile((run / "summary.json").string()) : nlohmann::json::object();
+  const nlohmann::json summary = readSummary(run / "summary.json");
   nlohmann::json data;
   data["run_dir"] = fs::absolute(run).lexically_normal().string();
   const std::string sequence = resolveSequence(o, summary, data);
@@ -117,6 +139,7 @@ std::string writeReport(const ReportOptions& o) {
     data["map"] = mapSection((run / "map_points.ply").string(), o.max_map_points, est, gt_in_map);
   }
   data["headline"] = headline;
+  if (notes) *notes = missingParts(summary, headline, sequence, gt.has_value());
   const std::string path = (run / "report.html").string();
   writeFileAtomic(path, renderPage(data), "report");
   return path;

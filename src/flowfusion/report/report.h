@@ -6,6 +6,7 @@
 // and its Content-Security-Policy forbids any request, so it opens offline in any browser.
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace ff::report {
 
@@ -24,7 +25,8 @@ struct ReportOptions {
 
 // Reads the run's files, writes RUN_DIR/report.html (atomically) and returns its path. InputError
 // naming the file when the run folder or its trajectory.txt is missing or a file is malformed;
-// optional parts (ground truth, masks, timings, map) that are absent are said so in the page.
-std::string writeReport(const ReportOptions& options);
+// optional parts (ground truth, masks, timings, map) that are absent are said so in the page, and
+// in `notes` when given (a missing sequence folder or ground truth, no shared timestamps).
+std::string writeReport(const ReportOptions& options, std::vector<std::string>* notes = nullptr);
 
 }  // namespace ff::report

@@ -27,10 +27,12 @@ std::string jpegDataUrl(const cv::Mat& bgr, int max_width_px) {
 
 cv::Mat readMask(const std::string& path) { return readImageFile(path, cv::IMREAD_GRAYSCALE, "mask"); }
 
-// The mask over the colour frame, or over grey when the colour frame is not known.
+// The mask over the colour frame, or over grey when the colour frame is not known or not there
+// (a --sequence whose rgb.txt names images it does not hold).
 cv::Mat overlay(const std::string& color_path, const cv::Mat& mask) {
-  cv::Mat color = color_path.empty() ? cv::Mat(mask.size(), CV_8UC3, cv::Scalar(96, 96, 96))
-                                     : readImageFile(color_path, cv::IMREAD_COLOR, "colour image");
+  cv::Mat color;
+  if (!color_path.empty()) color = readImageFile(color_path, cv::IMREAD_COLOR, "colour image");
+  if (color.empty()) color = cv::Mat(mask.size(), CV_8UC3, cv::Scalar(96, 96, 96));
   cv::Mat m = mask;
   if (m.size() != color.size()) cv::resize(mask, m, color.size(), 0, 0, cv::INTER_NEAREST);
   return overlayMask(color, m > 127);
