@@ -27,7 +27,9 @@ for assignment in args.set:
 seq = ff.TumSequence(args.sequence, frames=args.frames)
 system = ff.System(seq.camera, cfg, T_world_first=seq.initial_pose())
 for frame in seq:
-    result = system.process(frame.rgb, frame.depth, frame.timestamp, depth_timestamp=frame.depth_timestamp)
+    # process(frame) is what `flowfusion run` does; a source of one's own passes arrays instead:
+    # system.process(rgb, depth, timestamp, depth_timestamp=...) (the depth image's own time).
+    result = system.process(frame)
     if not result.tracking_ok:
         print(f"{frame.timestamp:.6f}: tracking lost ({result.message})")
 system.save(args.out, sequence=seq)

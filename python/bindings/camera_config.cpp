@@ -83,17 +83,23 @@ py::object getSetting(const SystemConfig& config, const std::string& key) {
 
 SequenceOptions sequenceOptions(const py::object& camera, double depth_scale, bool undistort) {
   SequenceOptions o;
-  if (!(depth_scale > 0 && std::isfinite(depth_scale)))
-    throw BadArgument("depth_scale: must be a positive number, got " + std::to_string(depth_scale));
+  checkDepthScale(depth_scale, "depth_scale");
   o.depth_scale = depth_scale;
   o.undistort = undistort;
   if (py::isinstance<CameraModel>(camera)) o.camera = cameraSpec(camera.cast<CameraModel>());
-  else if (!camera.is_none()) o.camera = camera.cast<std::string>();
+  else if (py::isinstance<py::str>(camera)) o.camera = camera.cast<std::string>();
+  else if (!camera.is_none())
+    throw py::type_error("camera: expected None, an ff.Camera or a spec string such as 'fr1', got " +
+                         py::str(py::type::of(camera).attr("__name__")).cast<std::string>());
   return o;
 }
 
 FrameRange frameRange(const py::object& frames) {
-  return frames.is_none() ? FrameRange{} : parseFrameRange(frames.cast<std::string>());
+  if (frames.is_none()) return FrameRange{};
+  if (!py::isinstance<py::str>(frames))
+    throw py::type_error("frames: expected None or a 'FIRST:LAST' string of frame indices, got " +
+                         py::str(py::type::of(frames).attr("__name__")).cast<std::string>());
+  return parseFrameRange(frames.cast<std::string>());
 }
 
 void bindCameraAndConfig(py::module_& m) {

@@ -1,9 +1,12 @@
 #include "convert.h"
 
+#include <cctype>
 #include <cmath>
-#include <nlohmann/json.hpp>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <pybind11/stl/filesystem.h>
+
+#include "flowfusion/core/image_file.h"
 
 namespace ff::py_bind {
 
@@ -61,7 +64,7 @@ void requireExists(const std::filesystem::path& path, const std::string& what) {
   if (!std::filesystem::exists(path, ec)) throw MissingPath(what + " '" + path.string() + "' does not exist");
 }
 
-MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels) {
+MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels, cv::Size expected) {
   if (!dtypeMatches(array, cv_depth))
     throw BadArgument(name + ": expected dtype " + dtypeName(cv_depth) + ", got " + dtypeText(array));
   const bool shape_ok = channels == 1 ? array.ndim() == 2
@@ -69,15 +72,46 @@ MatView viewOfArray(const py::array& array, const std::string& name, int cv_dept
   if (!shape_ok)
     throw BadArgument(name + ": expected shape (H, W" + (channels == 1 ? std::string() : ", " + std::to_string(channels)) +
                       "), got " + shapeText(array));
-  if (array.shape(0) == 0 || array.shape(1) == 0) throw BadArgument(name + ": the image is empty " + shapeText(array));
+  const py::ssize_t rows = array.shape(0), cols = array.shape(1);
+  if (rows == 0 || cols == 0) throw BadArgument(name + ": the image is empty " + shapeText(array));
+  if (rows > kMaxImagePixels / cols)
+    throw BadArgument(name + ": shape " + shapeText(array) + " holds more than " + std::to_string(kMaxImagePixels) +
+                      " pixels");
+  if (!expected.empty() && (cols != expected.width || rows != expected.height))
+    throw BadArgument(name + ": the image is " + std::to_string(cols) + "x" + std::to_string(rows) +
+                      " (WxH), the camera is " + std::to_string(expected.width) + "x" +
+                      std::to_string(expected.height));
   MatView view{py::array::ensure(array, py::array::c_style), {}};
-  view.mat = cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)),
-                     CV_MAKETYPE(cv_depth, channels), const_cast<void*>(view.array.data()));
+  if (!view.array) throw py::error_already_set();
+  view.mat = cv::Mat(static_cast<int>(rows), static_cast<int>(cols), CV_MAKETYPE(cv_depth, channels),
+                     const_cast<void*>(view.array.data()));
   return view;
 }
 
-cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels) {
-  return viewOfArray(array, name, cv_depth, channels).mat.clone();
+cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels, cv::Size expected) {
+  return viewOfArray(array, name, cv_depth, channels, expected).mat.clone();
+}
+
+std::string pythonWording(const std::string& message) {
+  static const std::pair<const char*, const char*> kNames[] = {
+      {"--delta", "delta"},          {"--max-diff", "max_diff"},       {"--frames", "frames"},
+      {"--depth-scale", "depth_scale"}, {"--set", "Config.set"},       {"--config", "Config.load"},
+      {"--overwrite", "overwrite=True"}, {"--no-undistort", "undistort=False"}, {"--camera", "camera"}};
+  std::string out = message;
+  for (const auto& [flag, name] : kNames) {
+    const size_t n = std::strlen(flag);
+    for (size_t at = out.find(flag); at != std::string::npos; at = out.find(flag, at)) {
+      const bool whole = at + n == out.size() || !(std::isalnum(static_cast<unsigned char>(out[at + n])) ||
+                                                   out[at + n] == '-' || out[at + n] == '_');
+      if (!whole) {
+        at += n;
+        continue;
+      }
+      out.replace(at, n, name);
+      at += std::strlen(name);
+    }
+  }
+  return out;
 }
 
 py::array arrayFromMat(const cv::Mat& mat) {

@@ -42,10 +42,18 @@ struct MatView {
   cv::Mat mat;
 };
 // dtype exactly cv_depth's (else BadArgument naming `name`), 2-D, or 3-D with `channels` channels
-// when channels > 1, not empty.
-MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels);
+// when channels > 1, not empty, at most kMaxImagePixels pixels and, when `expected` is not empty,
+// of that size. Every check reads only the shape, so a huge, broadcast or strided array is refused
+// before any copy.
+MatView viewOfArray(const py::array& array, const std::string& name, int cv_depth, int channels,
+                    cv::Size expected = {});
 // The same checks, and a copy that owns its data.
-cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels);
+cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_depth, int channels,
+                     cv::Size expected = {});
+
+// A message of the engine for a Python user: the command-line flags it names replaced by the
+// Python arguments that set the same thing ("--delta" -> "delta", "--set" -> "Config.set").
+std::string pythonWording(const std::string& message);
 
 // An HxW or HxWxC array owning a copy of `mat` (CV_8U, CV_16U or CV_32F).
 py::array arrayFromMat(const cv::Mat& mat);

@@ -26,23 +26,27 @@ PySequence::PySequence(const std::string& path, const SequenceOptions& options, 
 }
 
 void bindSequence(py::module_& m) {
-  py::class_<RgbdFrame>(m, "Frame", "One RGB-D frame as a sequence loads it (undistorted when its camera has distortion).")
+  py::class_<PyFrame>(m, "Frame",
+                      "One RGB-D frame as a sequence loads it (undistorted when its camera has distortion). "
+                      "System.process(frame) is the form that matches `flowfusion run`.")
       .def_property_readonly(
           "rgb",
-          [](const RgbdFrame& f) {
+          [](const PyFrame& f) {
             cv::Mat rgb;
-            cv::cvtColor(f.color, rgb, cv::COLOR_BGR2RGB);
+            cv::cvtColor(f.frame.color, rgb, cv::COLOR_BGR2RGB);
             return arrayFromMat(rgb);
           },
           "HxWx3 uint8, RGB.")
-      .def_property_readonly("depth", [](const RgbdFrame& f) { return arrayFromMat(f.depth); },
+      .def_property_readonly("depth", [](const PyFrame& f) { return arrayFromMat(f.frame.depth); },
                              "HxW float32, metres along the optical axis; 0 = no measurement.")
-      .def_readonly("timestamp", &RgbdFrame::timestamp, "Seconds, the colour image's time.")
-      .def_readonly("depth_timestamp", &RgbdFrame::depth_timestamp, "Seconds, the depth image's time.")
-      .def_readonly("name", &RgbdFrame::name, "The colour image's file.")
-      .def("__repr__", [](const RgbdFrame& f) {
-        return "flowfusion.Frame(" + std::to_string(f.timestamp) + ", " + std::to_string(f.width()) + "x" +
-               std::to_string(f.height()) + ")";
+      .def_property_readonly("timestamp", [](const PyFrame& f) { return f.frame.timestamp; },
+                             "Seconds, the colour image's time.")
+      .def_property_readonly("depth_timestamp", [](const PyFrame& f) { return f.frame.depth_timestamp; },
+                             "Seconds, the depth image's time (depth.txt's; up to 20 ms from the colour's in TUM).")
+      .def_property_readonly("name", [](const PyFrame& f) { return f.frame.name; }, "The colour image's file.")
+      .def("__repr__", [](const PyFrame& f) {
+        return "flowfusion.Frame(" + std::to_string(f.frame.timestamp) + ", " + std::to_string(f.frame.width()) + "x" +
+               std::to_string(f.frame.height()) + ")";
       });
 
   py::class_<PySequence>(m, "TumSequence",
@@ -57,8 +61,9 @@ void bindSequence(py::module_& m) {
            py::arg("path"), py::arg("camera") = py::none(), py::arg("depth_scale") = 5000.0,
            py::arg("undistort") = true, py::arg("frames") = py::none(),
            "TumSequence(path, camera=None, depth_scale=5000.0, undistort=True, frames=None): camera overrides "
-           "camera.txt and the folder name (an ff.Camera or a --camera spec); frames='FIRST:LAST' (inclusive) as "
-           "--frames. FileNotFoundError when the folder is missing, ValueError for malformed lists.")
+           "camera.txt and the folder name (an ff.Camera or a spec 'fr1' or 'fx,fy,cx,cy[,w,h[,k1..k3]]'); "
+           "frames='FIRST:LAST' frame indices (inclusive; 'FIRST:' or ':LAST' open). FileNotFoundError when the "
+           "folder is missing, ValueError for malformed lists, TypeError for an argument of the wrong type.")
       .def("__len__", &PySequence::size)
       .def(
           "__getitem__",
@@ -105,7 +110,8 @@ void bindSequence(py::module_& m) {
           "to_raw_pixels",
           [](const PySequence& s, const py::array& image) {
             const int channels = image.ndim() == 3 ? static_cast<int>(image.shape(2)) : 1;
-            const cv::Mat m = matFromArray(image, "image", CV_8U, channels);
+            const CameraIntrinsics& c = s.sequence().camera();
+            const cv::Mat m = matFromArray(image, "image", CV_8U, channels, {c.width, c.height});
             return arrayFromMat(s.source().toRawPixels(m));
           },
           py::arg("image"),

@@ -2,12 +2,17 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 
 #include "bindings.h"
 #include "convert.h"
+#include "flowfusion/core/output_folder.h"
+#include "flowfusion/core/undistortion.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/pipeline/files_sink.h"
 #include "sequence.h"
@@ -16,14 +21,23 @@ namespace ff::py_bind {
 
 namespace {
 
-// The system and what save() needs of the frames it processed (their masks).
+// Where a frame's mask goes back to the pixels of the image given: null when they are the same.
+using RawPixels = std::shared_ptr<const Undistorter>;
+
+cv::Mat inRawPixels(const RawPixels& raw, const cv::Mat& image) { return raw ? raw->toRawPixels(image) : image; }
+
+// The system and what save() needs of the frames it processed (their masks, in the pixels the
+// system worked in, with the mapping back to the pixels of the image given).
 class PySystem {
  public:
-  PySystem(const CameraIntrinsics& camera, const SystemConfig& config, const SE3& T_world_first, bool keep_masks)
-      : system_(config, camera, T_world_first), keep_masks_(keep_masks) {}
+  PySystem(const CameraModel& camera, const SystemConfig& config, const SE3& T_world_first, bool keep_masks)
+      : system_(config, camera.intrinsics, T_world_first), keep_masks_(keep_masks) {
+    if (!camera.distortion.none()) undistorter_ = std::make_shared<Undistorter>(camera.intrinsics, camera.distortion);
+  }
 
-  // Called without the GIL.
-  FrameResult process(const RgbdFrame& frame) {
+  // Called without the GIL. `raw` takes the frame's pixels back to those of the image given; the
+  // result's mask is returned in those. `sequence_dir`: the folder the frame came from, or "".
+  FrameResult process(const RgbdFrame& frame, const RawPixels& raw, const std::string& sequence_dir) {
     const std::lock_guard<std::mutex> lock(mutex_);
     if (!std::isfinite(frame.timestamp)) throw BadArgument("timestamp: must be finite");
     if (frames_ > 0 && !(frame.timestamp > last_timestamp_))
@@ -33,29 +47,58 @@ class PySystem {
     last_timestamp_ = frame.timestamp;
     ++frames_;
     rounds_ += r.iterations;
-    if (keep_masks_) masks_.emplace_back(frame.timestamp, r.dynamic_mask.clone());
+    if (!sequence_dir.empty() && std::find(inputs_.begin(), inputs_.end(), sequence_dir) == inputs_.end())
+      inputs_.push_back(sequence_dir);
+    if (keep_masks_) masks_.push_back({frame.timestamp, r.dynamic_mask.clone(), raw});
+    r.dynamic_mask = inRawPixels(raw, r.dynamic_mask);
     return r;
   }
 
-  // FilesSink driven as runSequence drives it, so the files are those `flowfusion run` writes.
+  // FilesSink driven as runSequence drives it, so the files are those `flowfusion run` writes. The
+  // output may not be, contain or lie inside a sequence the frames came from (the check `run` makes).
   std::vector<std::string> save(const std::string& out_dir, bool overwrite, const PySequence* sequence,
                                 bool export_map) {
     const std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<std::string> inputs = inputs_;
+    if (sequence) inputs.push_back(sequence->sequence().dir());
+    for (const auto& input : inputs) refuseOverlap(out_dir, input, "the input sequence");
     FilesSinkOptions options;
     options.out_dir = out_dir;
     options.overwrite = overwrite;
     options.write_masks = keep_masks_;
     options.export_map = export_map;
     FilesSink sink(options);
-    const FrameSource* source = sequence ? &sequence->source() : nullptr;
-    sink.begin({source ? source->name() : "python", source, system_.config(), system_.camera(), frames_});
-    for (const auto& [timestamp, mask] : masks_) {
+    const std::string name =
+        sequence ? std::filesystem::absolute(sequence->sequence().dir()).lexically_normal().string() : "python";
+    setOutputCommand("run");
+    const OutputRelease release;
+    sink.begin({name, nullptr, system_.config(), system_.camera(), frames_});
+    for (const auto& kept : masks_) {
       RgbdFrame frame;
-      frame.timestamp = timestamp;
+      frame.timestamp = kept.timestamp;
       FrameResult result;
-      result.dynamic_mask = mask;
+      // A frame without its own mapping takes the sequence's (arrays cut from its frames).
+      result.dynamic_mask = kept.raw || !sequence ? inRawPixels(kept.raw, kept.mask)
+                                                  : sequence->source().toRawPixels(kept.mask);
       sink.frame(frame, result);
     }
+    RunSummary s = summary();
+    sink.end(s, system_);
+    return s.written;
+  }
+
+  const FlowFusionSystem& system() const { return system_; }
+  const RawPixels& undistorter() const { return undistorter_; }
+  size_t frames() const { return frames_; }
+
+ private:
+  struct KeptMask {
+    double timestamp;
+    cv::Mat mask;  // the system's pixels
+    RawPixels raw;
+  };
+
+  RunSummary summary() const {
     RunSummary s;
     s.frames = frames_;
     s.mean_rounds = frames_ ? static_cast<double>(rounds_) / static_cast<double>(frames_) : 0.0;
@@ -68,51 +111,53 @@ class PySystem {
       s.map_budget_reached = map->budgetReached();
     }
     s.peak_memory_mib = eval::peakResidentMiB();
-    sink.end(s, system_);
-    return s.written;
+    return s;
   }
 
-  const FlowFusionSystem& system() const { return system_; }
-  size_t frames() const { return frames_; }
-
- private:
   std::mutex mutex_;
   FlowFusionSystem system_;
+  RawPixels undistorter_;  // the camera's lens distortion: arrays are raw images
   bool keep_masks_;
-  std::vector<std::pair<double, cv::Mat>> masks_;
+  std::vector<KeptMask> masks_;
+  std::vector<std::string> inputs_;  // sequence folders of the frames processed
   size_t frames_ = 0;
   long rounds_ = 0;
   double last_timestamp_ = 0;
 };
 
-void checkSize(const cv::Mat& m, const CameraIntrinsics& camera, const std::string& name) {
-  if (m.cols != camera.width || m.rows != camera.height)
-    throw BadArgument(name + ": the image is " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
-                      " (WxH), the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+// depth_timestamp: None (the colour image's time) or a finite number of seconds.
+double depthTime(const py::object& t) {
+  if (t.is_none()) return std::numeric_limits<double>::quiet_NaN();
+  const bool number = !py::isinstance<py::bool_>(t) && !py::isinstance<py::str>(t) && py::hasattr(t, "__float__");
+  if (!number)
+    throw py::type_error("depth_timestamp: expected None or a number of seconds, got " +
+                         py::str(py::type::of(t).attr("__name__")).cast<std::string>());
+  const double seconds = py::float_(t).cast<double>();
+  if (!std::isfinite(seconds)) throw BadArgument("depth_timestamp: must be finite, got " + std::to_string(seconds));
+  return seconds;
 }
 
-// The frame from user arrays: RGB or grey uint8, depth uint16 (depth_scale per metre) or float32 metres.
-// The conversions run without the GIL.
+// The frame from user arrays: RGB or grey uint8, depth uint16 (depth_scale per metre) or float32
+// metres, undistorted when the system's camera has lens distortion. Every argument is checked
+// before any pixel is read; the conversions run without the GIL.
 FrameResult processArrays(PySystem& s, const py::array& rgb, const py::array& depth, double timestamp,
                           const py::object& depth_timestamp, double depth_scale) {
   const CameraIntrinsics& camera = s.system().camera();
+  const cv::Size size(camera.width, camera.height);
   const bool grey = rgb.ndim() == 2;
-  const MatView colour = viewOfArray(rgb, "rgb", CV_8U, grey ? 1 : 3);
+  const MatView colour = viewOfArray(rgb, "rgb", CV_8U, grey ? 1 : 3, size);
   const bool raw = py::isinstance<py::array_t<uint16_t>>(depth);
   if (!raw && !py::isinstance<py::array_t<float>>(depth))
     throw BadArgument("depth: expected dtype uint16 (raw, depth_scale units per metre) or float32 (metres), got " +
                       py::str(depth.dtype()).cast<std::string>());
-  const MatView d = viewOfArray(depth, "depth", raw ? CV_16U : CV_32F, 1);
-  checkSize(colour.mat, camera, "rgb");
-  checkSize(d.mat, camera, "depth");
-  if (!(depth_scale > 0 && std::isfinite(depth_scale))) throw BadArgument("depth_scale: must be a positive number");
+  const MatView d = viewOfArray(depth, "depth", raw ? CV_16U : CV_32F, 1, size);
+  checkDepthScale(depth_scale, "depth_scale");
   RgbdFrame frame;
   frame.timestamp = timestamp;
-  if (!depth_timestamp.is_none()) frame.depth_timestamp = depth_timestamp.cast<double>();
+  frame.depth_timestamp = depthTime(depth_timestamp);
   // The views are read without the GIL (as NumPy's own functions do); they outlive `release`.
   py::gil_scoped_release release;
   cv::cvtColor(colour.mat, frame.color, grey ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
-  frame.intensity = intensityFromBgr(frame.color);
   if (raw) {
     d.mat.convertTo(frame.depth, CV_32F, 1.0 / depth_scale);
   } else {
@@ -121,7 +166,12 @@ FrameResult processArrays(PySystem& s, const py::array& rgb, const py::array& de
     if (!cv::checkRange(frame.depth, true, nullptr, 0.0, 1e4))
       throw BadArgument("depth: float32 depth must be finite metres in [0, 10000] (0 or NaN = no measurement)");
   }
-  return s.process(frame);
+  if (const RawPixels& u = s.undistorter()) {
+    frame.color = u->undistortColor(frame.color);
+    frame.depth = u->undistortDepth(frame.depth);  // nearest: the same for raw units and metres
+  }
+  frame.intensity = intensityFromBgr(frame.color);
+  return s.process(frame, s.undistorter(), "");
 }
 
 py::tuple mapPoints(const PySystem& s) {
@@ -160,7 +210,11 @@ void bindSystem(py::module_& m) {
       .def_property_readonly("T_world_cam", [](const FrameResult& r) { return arrayFromPose(r.T_world_cam); },
                              "4x4 float64 camera-to-world pose.")
       .def_property_readonly("dynamic_mask", [](const FrameResult& r) { return arrayFromMat(r.dynamic_mask); },
-                             "HxW uint8, 255 = dynamic, in the frame's pixels.")
+                             "HxW uint8, 255 = dynamic, in the pixels of the image passed in, as `flowfusion run` "
+                             "writes masks: for process(frame) those of the frame's image file (the raw, distorted "
+                             "image when the sequence undistorts, e.g. TUM fr1, fr2); for process(rgb, depth, ...) "
+                             "those of the arrays (raw when the System's camera has lens distortion and undistorts "
+                             "them itself).")
       .def_property_readonly(
           "scores",
           [](const FrameResult& r) -> py::object {
@@ -181,28 +235,41 @@ void bindSystem(py::module_& m) {
       .def(py::init([](const CameraModel& camera, const std::optional<SystemConfig>& config,
                        const py::object& T_world_first, bool keep_masks) {
              const SE3 T = T_world_first.is_none() ? SE3::Identity() : poseFromArray(T_world_first, "T_world_first");
-             return std::make_unique<PySystem>(camera.intrinsics, config.value_or(SystemConfig{}), T, keep_masks);
+             return std::make_unique<PySystem>(camera, config.value_or(SystemConfig{}), T, keep_masks);
            }),
            py::arg("camera"), py::arg("config") = py::none(), py::arg("T_world_first") = py::none(),
            py::arg("keep_masks") = true,
-           "System(camera, config=None, T_world_first=None, keep_masks=True): camera an ff.Camera (its pinhole "
-           "intrinsics; frames must be undistorted), config an ff.Config (defaults when None), T_world_first the "
-           "4x4 pose of the first frame (identity when None). keep_masks keeps each frame's mask for save() "
+           "System(camera, config=None, T_world_first=None, keep_masks=True): camera an ff.Camera; with lens "
+           "distortion (ff.Camera.preset('fr1')) process(rgb, depth, ...) takes raw images and undistorts them as "
+           "`flowfusion run` does, with seq.camera (pinhole) it takes the frames of a TumSequence as they are. "
+           "config an ff.Config (defaults when None), T_world_first the 4x4 pose of the first frame (identity when "
+           "None; seq.initial_pose() starts as `flowfusion run`). keep_masks keeps each frame's mask for save() "
            "(W*H bytes a frame). ValueError naming the first bad setting.")
-      .def("process", &processArrays, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"),
-           py::arg("depth_timestamp") = py::none(), py::arg("depth_scale") = 5000.0,
-           "process(rgb, depth, timestamp, depth_timestamp=None, depth_scale=5000.0) -> Result. rgb: HxWx3 uint8 "
-           "RGB or HxW uint8 grey; depth: HxW uint16 (depth_scale units per metre) or float32 metres (0 or NaN = "
-           "no measurement); timestamp in seconds, increasing; depth_timestamp the depth image's time when it "
-           "differs. The arrays must have the camera's size. Releases the GIL while it runs.")
       .def(
           "process",
-          [](PySystem& s, const RgbdFrame& frame) {
-            checkSize(frame.depth, s.system().camera(), "frame");
+          [](PySystem& s, const PyFrame& f) {
+            const CameraIntrinsics& c = s.system().camera();
+            if (f.frame.width() != c.width || f.frame.height() != c.height)
+              throw BadArgument("frame: the image is " + std::to_string(f.frame.width()) + "x" +
+                                std::to_string(f.frame.height()) + " (WxH), the camera is " + std::to_string(c.width) +
+                                "x" + std::to_string(c.height));
             py::gil_scoped_release release;
-            return s.process(frame);
+            return s.process(f.frame, f.raw, f.sequence_dir);
           },
-          py::arg("frame"), "process(frame) -> Result for an ff.Frame from a TumSequence.")
+          py::arg("frame"),
+          "process(frame) -> Result for an ff.Frame of a TumSequence: the frame as `flowfusion run` feeds it "
+          "(its depth image's own timestamp included), so a loop of process(frame) gives the run's trajectory "
+          "and masks. The form to use with a TumSequence.")
+      .def("process", &processArrays, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"),
+           py::arg("depth_timestamp") = py::none(), py::arg("depth_scale") = 5000.0,
+           "process(rgb, depth, timestamp, depth_timestamp=None, depth_scale=5000.0) -> Result, for frames from "
+           "your own source. rgb: HxWx3 uint8 RGB or HxW uint8 grey; depth: HxW uint16 (depth_scale units per "
+           "metre, 100 to 65535) or float32 metres (0 or NaN = no measurement); both of the camera's size; "
+           "timestamp in seconds, increasing; depth_timestamp the depth image's time (None: the same as "
+           "timestamp). To reproduce `flowfusion run` on a TumSequence pass depth_timestamp=frame.depth_timestamp "
+           "(or use process(frame)): without it the depth is taken at the colour image's time and the trajectory "
+           "differs where the two differ (TUM: up to 20 ms). ValueError or TypeError naming the argument before "
+           "any pixel is read; releases the GIL while it runs.")
       .def(
           "trajectory", [](const PySystem& s) { return arrayFromTrajectory(s.system().trajectory()); },
           "The poses so far, Nx8 float64: t tx ty tz qx qy qz qw (TUM, camera-to-world).")
@@ -221,8 +288,11 @@ void bindSystem(py::module_& m) {
           py::arg("export_map") = true,
           "save(out_dir, overwrite=False, sequence=None, export_map=True) -> list of written paths: the files "
           "`flowfusion run` writes (config.json, trajectory.txt, masks/, timings.csv, map.ply, map_points.ply, "
-          "preview/, summary.json). With the TumSequence the frames came from, masks go back to its raw pixels "
-          "and summary.json names it, as a run's. ValueError when out_dir is not empty and overwrite is False.")
+          "preview/, summary.json), masks in the pixels Result.dynamic_mask gives. With the TumSequence the "
+          "frames came from, arrays cut from its frames have their masks taken back to its raw pixels and "
+          "summary.json names it, as a run's. ValueError when out_dir is not empty and overwrite is False, when "
+          "another process writes into it, or when it is, contains or lies inside the sequence (or one the "
+          "processed frames came from): results never go into an input.")
       .def_property_readonly("frames", &PySystem::frames, "Frames processed so far.")
       .def_property_readonly("config", [](const PySystem& s) { return s.system().config(); }, "The ff.Config in use.")
       .def_property_readonly("camera", [](const PySystem& s) { return CameraModel{s.system().camera(), {}}; },

@@ -54,6 +54,8 @@ std::string synthesise(const std::filesystem::path& out_dir, uint64_t seed, int 
   const auto config = j.get<synth::SynthConfig>();
   checkConverted(j, nlohmann::json(config));
   py::gil_scoped_release release;
+  setOutputCommand("synth");
+  const OutputRelease output;
   const synth::SyntheticScene scene(config);
   synth::writeSequence(scene, out_dir.string(), overwrite);
   return out_dir.string();
@@ -63,12 +65,15 @@ py::dict run(const std::filesystem::path& sequence, const std::filesystem::path&
              const std::optional<SystemConfig>& config, const py::object& frames, const py::object& camera,
              double depth_scale, bool undistort, bool overwrite, bool export_map) {
   requireExists(sequence, "sequence folder");
+  refuseOverlap(out_dir.string(), sequence.string(), "the input sequence");  // as `flowfusion run`
   const SystemConfig c = config.value_or(SystemConfig{});
   const SequenceOptions options = sequenceOptions(camera, depth_scale, undistort);
   const FrameRange range = frameRange(frames);
   RunSummary s;
   {
     py::gil_scoped_release release;
+    setOutputCommand("run");
+    const OutputRelease output;
     FilesSinkOptions files;
     files.out_dir = out_dir.string();
     files.overwrite = overwrite;
@@ -109,7 +114,8 @@ void bindTools(py::module_& m) {
         py::arg("undistort") = true, py::arg("overwrite") = false, py::arg("export_map") = true,
         "run(sequence, out_dir, config=None, frames=None, camera=None, depth_scale=5000.0, undistort=True, "
         "overwrite=False, export_map=True) -> dict: `flowfusion run` in-process (the same loop, start pose and "
-        "files); the dict holds the trajectory (Nx8) and the run's summary.");
+        "files); the dict holds the trajectory (Nx8) and the run's summary. ValueError, before anything is "
+        "written, when out_dir is, contains or lies inside the sequence, or another process writes into it.");
 }
 
 }  // namespace ff::py_bind
