@@ -1,10 +1,12 @@
 // `flowfusion eval ate|rpe|seg|map`: the TUM benchmark's trajectory metrics, mask metrics and the
 // distance between two map point clouds.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "command.h"
 #include "flowfusion/core/atomic_file.h"
@@ -27,6 +29,7 @@ struct EvalOptions {
   double max_diff_s = 0.02;
   double delta_s = 1.0;
   double threshold_m = 0.03;
+  double above = 0.05;  // eval static: a frame counts as falsely marked above this share
 };
 
 void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
@@ -95,6 +98,23 @@ void runSeg(const EvalOptions& o) {
               r.pooled.recall);
 }
 
+void runStatic(const EvalOptions& o) {
+  const auto r = eval::evaluateStaticMasks(o.est, o.above);
+  if (o.json) {
+    std::cout << nlohmann::json(r).dump(2) << '\n';
+    return;
+  }
+  std::vector<const eval::StaticMaskFrame*> worst;
+  for (const auto& f : r.per_frame) worst.push_back(&f);
+  const size_t shown = std::min<size_t>(5, worst.size());
+  std::partial_sort(worst.begin(), worst.begin() + shown, worst.end(),
+                    [](const auto* a, const auto* b) { return a->marked > b->marked; });
+  std::printf("frames %zu\nmean_marked %f\nmax_marked %f\nframes_above %zu (%.1f %% of the frames have more than "
+              "%.1f %% marked)\n",
+              r.frames, r.mean_marked, r.max_marked, r.frames_above, 100 * r.fraction_above, 100 * r.above);
+  for (size_t k = 0; k < shown; ++k) std::printf("worst %s %f\n", worst[k]->path.c_str(), worst[k]->marked);
+}
+
 void printDifference(const char* prefix, const MapDifference& d) {
   std::printf("%s.mean %f m\n%s.median %f m\n%s.fraction_beyond_threshold %f\n", prefix, d.mean_m, prefix, d.median_m,
               prefix, d.fraction_beyond);
@@ -155,6 +175,16 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
                   "TUM folder of the masks' colour and depth images (default: the folder holding GT_MASKS)");
   seg->add_flag("--overwrite", opts->overwrite, "replace an existing contact sheet");
   seg->callback([opts] { runSeg(*opts); });
+
+  auto* stat = eval->add_subcommand(
+      "static", "False marks of a run on a static scene (every marked pixel is wrong): the share of each "
+                "frame marked dynamic, no ground-truth masks needed");
+  stat->add_option("EST_MASKS", opts->est, "folder of estimated masks (a run's masks/)")->required();
+  stat->add_option("--above", opts->above, "count the frames with more than this share marked")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.999));
+  stat->add_flag("--json", opts->json, "print the result as JSON (with each frame's share)");
+  stat->callback([opts] { runStatic(*opts); });
 
   auto* map = eval->add_subcommand(
       "map", "Nearest-neighbour distances between two map point clouds (map_points.ply), both directions");

@@ -115,5 +115,22 @@ TEST(EvaluateSegmentation, BadFoldersAreInputErrors) {
   }
 }
 
+TEST(EvaluateStaticMasks, SharesOfEachFrameMeanAndFramesAbove) {
+  ff::testing::TempDir dir;
+  // 40x30 = 1200 px: nothing, 60 px (5 %, not above), 120 px (10 %).
+  cv::imwrite((dir.path() / "1.000000.png").string(), rectMask(0, 0, 0, 0));
+  cv::imwrite((dir.path() / "1.033000.png").string(), rectMask(0, 0, 10, 6));
+  cv::imwrite((dir.path() / "1.066000.png").string(), rectMask(0, 0, 10, 12));
+  const StaticMaskResult r = evaluateStaticMasks(dir.path().string(), 0.05);
+  ASSERT_EQ(r.frames, 3u);
+  EXPECT_DOUBLE_EQ(r.per_frame[1].marked, 0.05);
+  EXPECT_DOUBLE_EQ(r.mean_marked, 0.05);
+  EXPECT_DOUBLE_EQ(r.max_marked, 0.1);
+  EXPECT_EQ(r.frames_above, 1u);
+  EXPECT_DOUBLE_EQ(r.fraction_above, 1.0 / 3);
+  EXPECT_THROW(evaluateStaticMasks((dir.path() / "none").string()), InputError);
+  EXPECT_THROW(evaluateStaticMasks(dir.path().string(), 1.5), InputError);
+}
+
 }  // namespace
 }  // namespace ff::eval

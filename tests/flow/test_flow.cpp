@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "analytic_scene.h"
@@ -156,6 +157,23 @@ TEST_F(FlowOnAnalyticScene, MovingObjectGivesLargeResidualOnItsPixels) {
     EXPECT_GT(on_box, 6.0) << enumName(backend);
     EXPECT_LT(background, 0.6) << enumName(backend);
   }
+}
+
+TEST(RelativeToFrameError, ScalesOnlyAFrameWhoseMedianErrorExceedsTheTypical) {
+  // A frame whose flow failed as a whole (blur): 75 % of the pixels 6 px off, a mover's quarter 24 px.
+  cv::Mat r(4, 4, CV_32F, cv::Scalar(6.f));
+  r.row(0).setTo(24.f);
+  r.at<float>(1, 1) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_DOUBLE_EQ(finiteMedian(r), 6.0);
+  const cv::Mat scaled = relativeToFrameError(r, 2.0);
+  EXPECT_FLOAT_EQ(scaled.at<float>(2, 2), 2.f);   // the frame's own error comes down to the typical
+  EXPECT_FLOAT_EQ(scaled.at<float>(0, 0), 8.f);   // the mover keeps standing out, 4x the frame
+  EXPECT_TRUE(std::isnan(scaled.at<float>(1, 1)));
+  // A frame whose flow is as good as usual is unchanged, and 0 turns the scaling off.
+  const cv::Mat good = r / 6.0;
+  EXPECT_EQ(cv::norm(relativeToFrameError(good, 2.0), good, cv::NORM_INF), 0.0);
+  EXPECT_FLOAT_EQ(relativeToFrameError(r, 0.0).at<float>(2, 2), 6.f);
+  EXPECT_TRUE(std::isnan(finiteMedian(cv::Mat(2, 2, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN())))));
 }
 
 }  // namespace

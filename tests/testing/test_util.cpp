@@ -23,10 +23,12 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(path_, ec);
 }
 
-std::optional<std::string> sharedFr1Xyz() {
+std::optional<std::string> sharedFr1Xyz() { return sharedTum("fr1_xyz_head300"); }
+
+std::optional<std::string> sharedTum(const std::string& name) {
   const char* env = std::getenv("FLOWFUSION_SHARED_DATA");
   const std::filesystem::path base = env && *env ? env : "../shared/data";
-  const auto p = base / "tum" / "fr1_xyz_head300";
+  const auto p = base / "tum" / name;
   if (std::filesystem::exists(p / "rgb.txt")) return std::filesystem::canonical(p).string();
   return std::nullopt;
 }

@@ -26,6 +26,8 @@ class TempDir {
 // The shared fr1/xyz frames (../shared/data/tum/fr1_xyz_head300 or $FLOWFUSION_SHARED_DATA),
 // or nullopt when absent; tests then GTEST_SKIP() with the message from sharedDataMissing().
 std::optional<std::string> sharedFr1Xyz();
+// Any of the shared TUM sequences by name (e.g. "fr1_rpy_head150"), or nullopt when absent.
+std::optional<std::string> sharedTum(const std::string& name);
 std::string sharedDataMissing();
 
 // Exit status (128 + signal when killed) and combined output of a command.

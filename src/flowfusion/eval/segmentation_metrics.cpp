@@ -132,4 +132,25 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   return r;
 }
 
+StaticMaskResult evaluateStaticMasks(const std::string& est_dir, double above) {
+  if (!(above >= 0 && above < 1)) throw InputError("the share a frame must exceed must be in [0, 1)");
+  const MaskFiles est = listMasks(est_dir);
+  StaticMaskResult r;
+  r.above = above;
+  const auto add = [&](double t, const std::string& path) {
+    const cv::Mat m = readMaskFile(path);
+    const double marked = m.empty() ? 0.0 : static_cast<double>(cv::countNonZero(m > 127)) / m.total();
+    r.per_frame.push_back({path, t, marked});
+    r.mean_marked += marked;
+    r.max_marked = std::max(r.max_marked, marked);
+    r.frames_above += marked > above;
+  };
+  for (const auto& [t, p] : est.stamped) add(t, p);
+  for (const auto& [stem, p] : est.named) add(std::numeric_limits<double>::quiet_NaN(), p);
+  r.frames = r.per_frame.size();
+  r.mean_marked /= static_cast<double>(r.frames);
+  r.fraction_above = static_cast<double>(r.frames_above) / static_cast<double>(r.frames);
+  return r;
+}
+
 }  // namespace ff::eval

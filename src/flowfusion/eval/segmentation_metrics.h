@@ -58,4 +58,29 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SegmentationResult, frames, gt_unmatched, est
 // or a size mismatch.
 SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::string& est_dir);
 
+// Masks of a run on a static scene, where every marked pixel is wrong (no ground-truth masks
+// needed): the share of each frame marked dynamic.
+struct StaticMaskFrame {
+  std::string path;
+  double timestamp = 0;   // from the name, s; NaN when the name is not a number
+  double marked = 0;      // share of the frame's pixels marked dynamic, [0, 1]
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StaticMaskFrame, path, timestamp, marked)
+
+struct StaticMaskResult {
+  size_t frames = 0;
+  double mean_marked = 0;           // mean over frames of the marked share, [0, 1]
+  double max_marked = 0;
+  double above = 0.05;              // the share a frame must exceed to count in frames_above
+  size_t frames_above = 0;          // frames with more than `above` marked
+  double fraction_above = 0;        // frames_above / frames
+  std::vector<StaticMaskFrame> per_frame;  // timestamped ones first, in time order
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(StaticMaskResult, frames, mean_marked, max_marked, above, frames_above,
+                                   fraction_above, per_frame)
+
+// Reads every <timestamp>.png of `est_dir` (as evaluateSegmentation does). `above` in [0, 1).
+// InputError naming the folder or file on a missing folder, no mask, an unreadable file.
+StaticMaskResult evaluateStaticMasks(const std::string& est_dir, double above = 0.05);
+
 }  // namespace ff::eval

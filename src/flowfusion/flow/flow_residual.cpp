@@ -1,7 +1,9 @@
 #include "flowfusion/flow/flow_residual.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "flowfusion/core/error.h"
 
@@ -63,6 +65,27 @@ cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
     }
   }
   return r;
+}
+
+double finiteMedian(const cv::Mat& values) {
+  if (values.type() != CV_32FC1) throw InputError("finiteMedian: values are not CV_32FC1");
+  std::vector<float> v;
+  v.reserve(values.total());
+  for (int r = 0; r < values.rows; ++r) {
+    const float* p = values.ptr<float>(r);
+    for (int c = 0; c < values.cols; ++c)
+      if (std::isfinite(p[c])) v.push_back(p[c]);
+  }
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+cv::Mat relativeToFrameError(const cv::Mat& r_F, double typical_px) {
+  if (typical_px <= 0 || r_F.empty()) return r_F;
+  const double median = finiteMedian(r_F);
+  if (!(median > typical_px)) return r_F;
+  return r_F * (typical_px / median);
 }
 
 }  // namespace ff

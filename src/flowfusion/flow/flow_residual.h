@@ -22,4 +22,13 @@ cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE
 // a coarse ego flow gives a coarse residual in that level's pixels.
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
 
+// The median of the finite values of a CV_32FC1 image (NaN when it has none).
+double finiteMedian(const cv::Mat& values);
+
+// r_F relative to the frame's own flow error: when the median r_F over the frame exceeds
+// `typical_px`, the flow failed on the frame as a whole (motion blur, a large rotation), not on a
+// mover, which covers a minority of the view; r_F is scaled by typical_px / median, so only what
+// stands out from the frame's error counts as motion. Unchanged below it; `typical_px` <= 0 = off.
+cv::Mat relativeToFrameError(const cv::Mat& r_F, double typical_px);
+
 }  // namespace ff

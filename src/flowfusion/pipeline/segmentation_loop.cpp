@@ -200,7 +200,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
-      res.r_F = flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur);
+      res.r_F = relativeToFrameError(
+          flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur),
+          config_.scores.flow_error_px);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);

@@ -155,6 +155,8 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
   if (!(c.target_mover_margin_px >= 0 && c.target_mover_margin_px <= 16))
     throw InputError("scores.target_mover_margin_px must be in [0, 16] pixels (0 turns the margin off)");
+  if (!(c.flow_error_px >= 0 && std::isfinite(c.flow_error_px)))
+    throw InputError("scores.flow_error_px must be a finite number of pixels >= 0 (0 turns the scaling off)");
 }
 
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,

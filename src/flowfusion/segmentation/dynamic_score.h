@@ -69,12 +69,17 @@ struct ScoreConfig {
   // that mask, would show the depth of the map behind it as motion and keep it dynamic
   // (docs/tuning.md#target_mover_margin_px).
   int target_mover_margin_px = 1;
+  // Pixels of the VGA image (our extension; 0 = off): when the median flow residual over the frame
+  // exceeds this, the flow failed on the frame as a whole (real motion blur, a large rotation the
+  // flow did not follow), and r_F is scaled by this over the median (relativeToFrameError), so only
+  // what stands out from the frame's own error counts (docs/tuning.md#flow_error_px).
+  double flow_error_px = 2.0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
-                                                target_mover_share, target_mover_margin_px)
+                                                target_mover_share, target_mover_margin_px, flow_error_px)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
