@@ -22,13 +22,14 @@ TEST(OutputLock, ASecondRunIntoTheSameFolderIsRefusedWhileTheFirstWrites) {
   testing::TempDir tmp;
   const std::string seq = (tmp.path() / "seq").string(), out = (tmp.path() / "out").string();
   ASSERT_EQ(testing::runFlowfusion("synth " + seq + " --frames 80 --width 160 --height 120").status, 0);
-  // The second run starts once the first has written a few masks, and asks for --overwrite.
+  // The second run starts once the first has written a few masks, and asks for --overwrite; the
+  // first is stopped (SIGSTOP) meanwhile, so on a loaded machine it cannot end before the second starts.
   const std::string app = FLOWFUSION_APP_PATH;
   const std::string script =
       app + " run " + seq + " --out " + out + " --quiet --no-map > " + tmp.str() + "/first.log 2>&1 & pid=$!; " +
-      "for i in $(seq 600); do n=$(ls " + out + "/masks 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.05; " +
-      "done; " + app + " run " + seq + " --out " + out + " --overwrite --quiet --no-map " +
-      "--set pipeline.max_iterations=2; second=$?; wait $pid; first=$?; echo \"first=$first second=$second\"";
+      "for i in $(seq 1200); do n=$(ls " + out + "/masks 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.05; " +
+      "done; kill -STOP $pid; " + app + " run " + seq + " --out " + out + " --overwrite --quiet --no-map " +
+      "--set pipeline.max_iterations=2; second=$?; kill -CONT $pid; wait $pid; first=$?; echo \"first=$first second=$second\"";
   const auto r = testing::runShell(script);
   EXPECT_NE(r.output.find("first=0 second=2"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("another flowfusion command is writing into this output folder"), std::string::npos)
