@@ -44,10 +44,15 @@ scene sitting 1504 "--people 1" --seats 1 --camera-speed 0.1 --angular-speed 3
 scene near_rpy 1505 "--near-objects 1 --people 1" --camera-motion rpy --angular-speed 40 --camera-speed 0.1 \
   --exposure-ms 20
 
-# The same people on real fr1/xyz frames (twin: the real sequence).
+# Real frames (issue 29), each twin the real sequence itself: people on fr1/xyz, one person on the
+# fast-rotating, blurred fr1/rpy, a box 0.6-1.0 m in front of the camera on fr1/xyz.
 fr1="$shared/tum/fr1_xyz_head300"
-if [[ -d $fr1 ]]; then
+rpy="$shared/tum/fr1_rpy_head150"
+if [[ -d $fr1 && -d $rpy ]]; then
   "$ff" augment "$fr1" "$out/fr1_people" --seed 1506 --objects 0 --people 2 --frames "0:$((frames - 1))" --overwrite
+  "$ff" augment "$rpy" "$out/rpy_people" --seed 2901 --objects 0 --people 1 --overwrite
+  "$ff" augment "$fr1" "$out/xyz_near" --seed 2902 --objects 1 --set min_distance=0.6 --set max_distance=1.0 \
+    --frames "0:$((frames - 1))" --overwrite
 else
-  echo "$0: $fr1 not found, skipping the augmented scene" >&2
+  echo "$0: $fr1 or $rpy not found, skipping the augmented real scenes" >&2
 fi

@@ -296,6 +296,42 @@ TEST(DynamicScores, WeakMotionDoesNotKeepTheModelTerm) {
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }
 
+TEST(DynamicScores, OnlyTheFlowStartsAGroupsMotionTheDepthKeepsARememberedOneMoving) {
+  // One cluster 2 m in front of the model with a depth residual (delta 0.17: above
+  // model_motion_delta, below theta_t) and no flow residual: a static surface the map and the
+  // target lack (real fr1/rpy: a desk come into view), each depth cue confirming the other.
+  // Cluster 1 is the static background (the memory holds only a minority of the view).
+  ClusterGraph g;
+  g.labels = (cv::Mat_<int>(1, 6) << 0, 0, 1, 1, 1, 1);
+  g.num_clusters = 2;
+  g.sizes = {2, 4};
+  g.mean_depth = {1.0f, 1.0f};
+  g.centroids.resize(2);
+  ResidualImages r;
+  r.r_D = (cv::Mat_<float>(1, 6) << 0.17f, 0.17f, 0.f, 0.f, 0.f, 0.f);
+  r.r_F = cv::Mat(1, 6, CV_32F, cv::Scalar(0.f));
+  r.r_M = (cv::Mat_<float>(1, 6) << 2.f, 2.f, 0.f, 0.f, 0.f, 0.f);
+  ScoreConfig cfg;
+  ASSERT_EQ(cfg.model_motion_cue, ModelMotionCue::kFlow);
+  const DynamicScores s = computeDynamicScores(g, r, cfg);
+  EXPECT_NEAR(s.delta[0], 0.17, 1e-5);  // the model term was dropped
+  EXPECT_LT(s.b[0], 0.5f);
+  // Remembered as moving (a person who walked there and sat down): the depth keeps it moving.
+  r.memory = (cv::Mat_<float>(1, 6) << 1.f, 1.f, 0.f, 0.f, 0.f, 0.f);
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
+  // Flow motion alone (delta 0.165, below theta_t without the model term) starts it, no memory.
+  r.memory = cv::Mat();
+  const cv::Mat r_D = r.r_D;
+  r.r_D = cv::Mat();
+  r.r_F.colRange(0, 2).setTo(cv::Scalar(static_cast<float>(1.1 * cfg.model_motion_delta / cfg.alpha_F)));
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
+  // Before: any term started it.
+  r.r_D = r_D;
+  r.r_F.setTo(cv::Scalar(0.f));
+  cfg.model_motion_cue = ModelMotionCue::kAnyTerm;
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
+}
+
 TEST(DynamicScores, AClusterOnTheTargetsMoversIsDecidedByItsPriorUnlessItMovesOrAgreesWithTheMap) {
   // Four separate clusters, all dynamic in the previous frame but cluster 3. Clusters 0, 2 and 3
   // land on the target's movers (no intensity residual); cluster 1 is compared with the target.

@@ -179,6 +179,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
 
   // Per cluster and term: sum and count of valid pixels.
   constexpr int K = 8;
+  constexpr int kFlowTerm = 2;   // index of r_F in `terms`: the motion cue independent of the map
   constexpr int kModelTerm = 3;  // index of r_M in `terms`: kept apart from the motion terms
   constexpr int kAgreement = 4;  // index of a_M: scales the motion terms
   constexpr int kPrior = 5;      // index of the carried scores: the temporal prior
@@ -212,7 +213,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
            !(mean(c, kAgreement) > 0.5);  // NaN (no agreement term) is not above
   };
   // Eq. 10 from the motion terms (r_I, r_D, r_F) and the model term separately.
-  std::vector<double> delta(n), model(n, 0.0);
+  std::vector<double> delta(n), model(n, 0.0), flow_delta(n, 0.0);
   for (int c = 0; c < n; ++c) {
     const double D = graph.mean_depth[c];
     const double inv_D = D > 0 ? 1.0 / D : 0.0;
@@ -224,7 +225,12 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
       (k == kModelTerm ? model[c] : d) += scale[k] * mean(c, k);
       any = true;
     }
-    if (cnt[K * c + kAgreement] > 0) d *= std::max(0.0, 1.0 - config.model_agreement * mean(c, kAgreement));
+    if (cnt[K * c + kFlowTerm] > 0) flow_delta[c] = config.alpha_F * mean(c, kFlowTerm);
+    if (cnt[K * c + kAgreement] > 0) {
+      const double static_evidence = std::max(0.0, 1.0 - config.model_agreement * mean(c, kAgreement));
+      d *= static_evidence;
+      flow_delta[c] *= static_evidence;
+    }
     const bool evidence = any && !(uncompared(c) && d + model[c] < config.theta_t);
     delta[c] = evidence ? d : std::numeric_limits<double>::quiet_NaN();
   }
@@ -240,7 +246,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   Eigen::VectorXd b = solve();
   // Connected groups of dynamic clusters; which of them move now, which moved recently.
   const std::vector<int> root = dynamicGroups(graph.edges, b);
-  std::vector<char> moves(n, 0), remembered(n, 0);
+  std::vector<char> moves(n, 0), flow_moves(n, 0), remembered(n, 0);
   std::vector<double> group_pixels(n, 0.0);
   double pixels = 0;
   for (int c = 0; c < n; ++c) {
@@ -248,6 +254,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
     if (b[c] <= 0.5) continue;
     group_pixels[root[c]] += graph.sizes[c];
     if (delta[c] > config.model_motion_delta) moves[root[c]] = 1;
+    if (flow_delta[c] > config.model_motion_delta) flow_moves[root[c]] = 1;
     if (mean(c, kMemory) >= 0.5) remembered[root[c]] = 1;
   }
   // A group covering more than half of the clustered pixels is the background under a wrong pose,
@@ -255,6 +262,8 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   std::vector<char> minority(n);
   for (int c = 0; c < n; ++c) minority[c] = group_pixels[c] <= 0.5 * pixels;
   for (int c = 0; c < n; ++c) remembered[c] = remembered[c] && minority[c];
+  if (config.model_motion_cue == ModelMotionCue::kFlow)
+    for (int c = 0; c < n; ++c) moves[c] = flow_moves[c] || (moves[c] && remembered[c]);
   if (config.model_needs_motion && !residuals.r_M.empty()) {
     bool dropped = false;
     for (int c = 0; c < n; ++c)

@@ -6,9 +6,18 @@
 #include <utility>
 #include <vector>
 
+#include "flowfusion/core/config_enum.h"
 #include "flowfusion/segmentation/clustering.h"
 
 namespace ff {
+
+// Which of Eq. 10's terms can start a group's motion for model_needs_motion (docs/tuning.md#model_motion_cue).
+enum class ModelMotionCue {
+  kAnyTerm,  // delta (r_I, r_D and r_F together) above model_motion_delta
+  kFlow,     // the flow term alone starts it; delta keeps a group moving that the memory holds
+};
+FLOWFUSION_CONFIG_ENUM(ModelMotionCue, "scores.model_motion_cue", {ModelMotionCue::kAnyTerm, "any_term"},
+                       {ModelMotionCue::kFlow, "flow"})
 
 // The defaults and the measurements behind them: docs/tuning.md#scores.
 struct ScoreConfig {
@@ -40,6 +49,12 @@ struct ScoreConfig {
   // That motion evidence: Eq. 10's delta above this in one cluster of the group, between theta_b
   // and theta_t (docs/tuning.md#model_motion_delta).
   double model_motion_delta = 0.15;
+  // What may show that motion first. r_D compares the depth with a target whose surfaces partly
+  // come from the map, so a static surface the map lacks (come into view, or flagged once) has a
+  // depth residual and a model occlusion term at once, each confirming the other in every frame:
+  // on real frames the flow, an independent cue, starts a group's motion (and its memory); the
+  // depth keeps a remembered group moving, so a person who sat down stays dynamic.
+  ModelMotionCue model_motion_cue = ModelMotionCue::kFlow;
   // Static evidence (our extension): a cluster agreeing with the stable map over a fraction a of
   // its pixels has its motion delta scaled by (1 - model_agreement * a) (docs/tuning.md#agreement).
   double model_agreement = 1.0;
@@ -77,7 +92,7 @@ struct ScoreConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, alpha_M, model_margin,
-                                                model_needs_motion, model_motion_delta, model_agreement,
+                                                model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
                                                 target_mover_share, target_mover_margin_px, flow_error_px)
 // Throws InputError naming the first bad setting.
