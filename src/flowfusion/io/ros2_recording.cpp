@@ -228,12 +228,24 @@ class Ros2Recording : public RosRecording {
           types[k] = typeOf(t.type);
         }
     types_ = types;
-    for (size_t f = 0; f < files_.size(); ++f)
-      files_[f]->scan(topics, [&](size_t slot, const Bytes& b, const Location& at) {
-        visit(slot, decode(slot, b, where_[slot].size(), f));
-        where_[slot].emplace_back(f, at);
-        return true;
-      });
+    for (size_t f = 0; f < files_.size(); ++f) {
+      bool in_visit = false;  // an error of the caller's passes as it is
+      try {
+        files_[f]->scan(topics, [&](size_t slot, const Bytes& b, const Location& at) {
+          const RosImage m = decode(slot, b, where_[slot].size(), f);
+          in_visit = true;
+          visit(slot, m);
+          in_visit = false;
+          where_[slot].emplace_back(f, at);
+          return true;
+        });
+      } catch (const InputError& e) {
+        if (in_visit) throw;
+        std::string listed;
+        for (const std::string& t : topics) listed += (listed.empty() ? "" : ", ") + t;
+        throw InputError(std::string(e.what()) + " (reading " + listed + ")");
+      }
+    }
   }
 
   RosImage image(size_t slot, size_t index) override {
