@@ -96,8 +96,8 @@ void execute(const RunCommand& c) {
 const RegisterCommand reg("1-run", [](CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
   CLI::App* cmd =
-      app.add_subcommand("run", "Track an RGB-D sequence (folder or ROS bag), segment moving objects, map the static scene");
-  cmd->add_option("sequence", c->sequence, "Sequence folder (TUM, Bonn, ICL-NUIM, ETH3D layouts) or .bag file")
+      app.add_subcommand("run", "Track an RGB-D sequence (folder, ROS 1 or ROS 2 bag), segment moving objects, map the static scene");
+  cmd->add_option("sequence", c->sequence, "Sequence folder (TUM, Bonn, ICL-NUIM, ETH3D layouts), ROS 1 .bag, or ROS 2 bag (rosbag2 folder, .mcap, .db3)")
       ->required();
   cmd->add_option("--out", c->out, "Output folder (trajectory.txt, masks/, map.ply, ...)")->required();
   cmd->add_flag("--overwrite", c->overwrite, "Write into a non-empty output folder");

@@ -255,6 +255,24 @@ TEST(Ros2Bag, RunsOnMcapAndDb3GiveTheFoldersTrajectoryAndMasks) {
   }
 }
 
+TEST(Ros2Bag, TheCommandLineRunsAndConvertsRos2Bags) {
+  REQUIRE_MCAP_WRITER();
+  ff::testing::TempDir tmp;
+  const std::string mcap = (tmp.path() / "walk.mcap").string(), db3 = (tmp.path() / "walk.db3").string();
+  writeMcap(mcap);
+  writeDb3(db3);
+  const std::string out = (tmp.path() / "run").string();
+  const auto run = ff::testing::runFlowfusion("run '" + mcap + "' --out '" + out + "' --no-map --depth-scale 5000");
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_EQ(readTrajectory(out + "/trajectory.txt").size(), fixture().entries.size());
+  const std::string converted = (tmp.path() / "converted").string();
+  const auto convert = ff::testing::runFlowfusion("convert '" + db3 + "' '" + converted + "' --depth-scale 5000");
+  ASSERT_EQ(convert.status, 0) << convert.output;
+  EXPECT_NE(convert.output.find("wrote 6 frames (/camera/rgb/image_color, /camera/depth/image)"), std::string::npos)
+      << convert.output;
+  EXPECT_EQ(TumSequence::open(converted).size(), fixture().entries.size());
+}
+
 void expectRefused(const std::string& path, const std::vector<std::string>& parts, bool on_read = false) {
   const std::string message = inputErrorOf([&] {
     const auto bag = openFrameSource(path, bagOptions());
