@@ -84,6 +84,7 @@ class McapReader {
   std::map<uint16_t, McapChannel> channels_;
   std::map<uint16_t, std::array<std::string, 3>> schemas_;  // id -> name, encoding, data
   std::vector<ChunkRef> chunks_;
+  std::set<uint64_t> verified_;  // file offsets of the chunks whose CRC has been checked
   std::vector<std::pair<uint64_t, Buffer>> cache_;  // decompressed chunks by file offset, newest last
 };
 
