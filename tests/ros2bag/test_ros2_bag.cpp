@@ -3,6 +3,7 @@
 // CDR encoding, write_db3.py) read as the TUM folder of the same frames reads; whole runs on them
 // give the folder's trajectory and masks; bad files give InputErrors naming the file and topic.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -305,6 +306,10 @@ TEST(Ros2Bag, BadMcapFilesAreInputErrorsNamingFileAndTopic) {
   fs::copy_file(good, tiny);
   fs::resize_file(tiny, 4);
   expectRefused(tiny, {"not an MCAP file"});
+  const std::string fifo = (tmp.path() / "pipe.mcap").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expectRefused(fifo, {"is not a regular file"});
+  expectRefused((tmp.path() / "absent.mcap").string(), {"does not exist"});
   const std::string wrong = (tmp.path() / "wrong.mcap").string();
   writeMcap(wrong, "--wrong-schema");
   expectRefused(wrong, {"/camera/color/image_raw", "schema sensor_msgs/msg/Image"});

@@ -146,14 +146,21 @@ std::vector<uint8_t> decompressChunk(const uint8_t* p, size_t n, bool check_crc 
 void McapReader::fail(const std::string& message) const { throw InputError(path_ + ": " + message); }
 
 McapReader::McapReader(std::string path) : path_(std::move(path)) {
-  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
-  struct stat st {};
-  if (fd_ < 0 || ::fstat(fd_, &st) != 0) fail("cannot open the MCAP file (" + std::string(std::strerror(errno)) + ")");
-  if (!S_ISREG(st.st_mode)) {
+  fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd_ < 0) fail("cannot open the MCAP file (" + std::string(std::strerror(errno)) + ")");
+  try {
+    readStart();
+  } catch (...) {
     ::close(fd_);
     fd_ = -1;
-    fail("is not a regular file; an MCAP file is read from a file on disk");
+    throw;
   }
+}
+
+// The file's magic and version, then its channels and chunks from the summary or a linear scan.
+void McapReader::readStart() {
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) fail("is not a regular file; an MCAP file is read from a file on disk");
   size_ = uint64_t(st.st_size);
   uint8_t magic[kMagicBytes] = {};
   if (size_ < kMagicBytes) fail("not an MCAP file (" + std::to_string(size_) + " bytes, shorter than its magic)");
@@ -201,7 +208,7 @@ void McapReader::onDefinition(uint8_t op, const uint8_t* p, size_t n, const std:
     const auto schema = uint16_t(f.uint(2));
     c.topic = f.str();
     c.message_encoding = f.str();
-    if (schema != 0) c.schema_name = std::to_string(schema);  // resolved once every schema is known
+    c.schema_id = schema;  // 0: none; resolved once every schema is known
     if (channels_.count(c.id) && channels_[c.id].topic != c.topic)
       throw ParseError(where + ": channel " + std::to_string(c.id) + " is declared for two topics");
     channels_[c.id] = c;
@@ -210,9 +217,10 @@ void McapReader::onDefinition(uint8_t op, const uint8_t* p, size_t n, const std:
 
 void McapReader::resolveSchemas() {
   for (auto& [id, c] : channels_) {
-    if (c.schema_name.empty()) continue;
-    const auto it = schemas_.find(uint16_t(std::stoul(c.schema_name)));
-    if (it == schemas_.end()) throw ParseError("channel " + c.topic + " names schema " + c.schema_name + ", which is not in the file");
+    if (c.schema_id == 0) continue;
+    const auto it = schemas_.find(c.schema_id);
+    if (it == schemas_.end())
+      throw ParseError("channel " + c.topic + " names schema " + std::to_string(c.schema_id) + ", which is not in the file");
     c.schema_name = it->second[0];
     c.schema_encoding = it->second[1];
     c.schema_data = it->second[2];

@@ -17,7 +17,7 @@
 namespace ff {
 
 struct McapChannel {
-  uint16_t id = 0;
+  uint16_t id = 0, schema_id = 0;       // schema_id 0: no schema
   std::string topic, message_encoding;                    // e.g. "cdr"
   std::string schema_name, schema_encoding, schema_data;  // e.g. sensor_msgs/msg/Image, ros2msg, its text
 };
@@ -70,6 +70,7 @@ class McapReader {
   [[noreturn]] void fail(const std::string& message) const;
   void read(uint64_t offset, size_t n, uint8_t* out) const;
   std::vector<uint8_t> read(uint64_t offset, size_t n) const;
+  void readStart();
   bool readSummary();
   void scanLinear();
   void onDefinition(uint8_t op, const uint8_t* p, size_t n, const std::string& where);

@@ -199,6 +199,8 @@ class Ros2Recording : public RosRecording {
     std::error_code ec;
     const bool folder = fs::is_directory(path_, ec);
     if (!folder && !fs::exists(path_, ec)) throw InputError(path_ + ": ROS 2 bag does not exist");
+    if (!folder && !fs::is_regular_file(path_, ec))
+      throw InputError(path_ + ": is not a regular file (a FIFO, socket or device); a ROS 2 bag is read from disk");
     for (const std::string& file : folder ? folderFiles(path_) : std::vector<std::string>{path_}) {
       const std::string ext = fs::path(file).extension().string();
       if (ext == ".mcap") files_.push_back(std::make_unique<McapStorage>(file));
