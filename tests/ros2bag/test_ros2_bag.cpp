@@ -14,6 +14,7 @@
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/bag_convert.h"
 #include "flowfusion/io/bag_source.h"
+#include "flowfusion/io/mcap_reader.h"
 #include "flowfusion/io/tum_folder_source.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
@@ -272,6 +273,55 @@ TEST(Ros2Bag, TheCommandLineRunsAndConvertsRos2Bags) {
   EXPECT_NE(convert.output.find("wrote 6 frames (/camera/rgb/image_color, /camera/depth/image)"), std::string::npos)
       << convert.output;
   EXPECT_EQ(TumSequence::open(converted).size(), fixture().entries.size());
+}
+
+// What the MCAP project's reader (read_mcap.mjs) finds in a file.
+nlohmann::json readBackWithMcapCore(const std::string& path) {
+  const std::string reader = (fs::path(FLOWFUSION_MCAP_WRITER).parent_path() / "read_mcap.mjs").string();
+  const auto r = ff::testing::runShell("node '" + reader + "' '" + path + "' 2>&1");
+  EXPECT_EQ(r.status, 0) << r.output;
+  return nlohmann::json::parse(r.output.substr(0, r.output.find('\n')));
+}
+
+TEST(Ros2Bag, RunMcapOutputIsReadBackByTheMcapProjectsReader) {
+  REQUIRE_MCAP_WRITER();
+  ff::testing::TempDir tmp;
+  const std::string out = (tmp.path() / "run").string(), mcap = (tmp.path() / "run.mcap").string();
+  const auto run = ff::testing::runFlowfusion("run '" + fixture().dir + "' --out '" + out + "' --mcap '" + mcap + "'");
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find(mcap), std::string::npos) << "the summary lists the MCAP file: " << run.output;
+  const nlohmann::json got = readBackWithMcapCore(mcap);
+  const size_t n = fixture().entries.size();
+  const std::map<std::string, std::pair<std::string, size_t>> expected = {
+      {"/camera/pose", {"foxglove.PoseInFrame", n}},         {"/tf", {"foxglove.FrameTransform", n}},
+      {"/camera/path", {"foxglove.PosesInFrame", 1}},        {"/camera/color", {"foxglove.RawImage", n}},
+      {"/camera/mask", {"foxglove.RawImage", n}},            {"/camera/depth", {"foxglove.RawImage", n}},
+      {"/camera/calibration", {"foxglove.CameraCalibration", 1}}, {"/map", {"foxglove.PointCloud", 1}}};
+  ASSERT_EQ(got["channels"].size(), expected.size()) << got["channels"].dump();
+  size_t messages = 0;
+  for (const auto& [topic, want] : expected) {
+    const nlohmann::json& c = got["channels"][topic];
+    EXPECT_EQ(c["schema"], want.first) << topic;
+    EXPECT_EQ(c["schema_encoding"], "jsonschema") << topic;
+    EXPECT_EQ(c["encoding"], "json") << topic;
+    EXPECT_EQ(c["messages"].get<size_t>(), want.second) << topic;
+    messages += want.second;
+  }
+  EXPECT_EQ(got["statistics_messages"].get<size_t>(), messages);
+  EXPECT_GE(got["chunks"].get<size_t>(), 1u);
+  const Trajectory trajectory = readTrajectory(out + "/trajectory.txt");
+  ASSERT_EQ(got["poses"].size(), trajectory.size());
+  for (size_t i = 0; i < trajectory.size(); ++i) {
+    const std::vector<double> p = got["poses"][i].get<std::vector<double>>();  // t, x y z, qx qy qz qw
+    const SE3 T = poseFromTranslationQuaternion(Eigen::Vector3d(p[1], p[2], p[3]), Eigen::Quaterniond(p[7], p[4], p[5], p[6]));
+    EXPECT_NEAR(p[0], trajectory[i].timestamp, 1e-6) << i;
+    // trajectory.txt holds 7 significant digits; the MCAP the doubles themselves
+    EXPECT_LT((T.matrix() - trajectory[i].T_world_cam.matrix()).cwiseAbs().maxCoeff(), 1e-6) << i;
+  }
+  // Our own reader finds the same through the summary's chunk indexes.
+  McapReader ours(mcap);
+  EXPECT_TRUE(ours.indexed());
+  EXPECT_EQ(ours.channels().size(), expected.size());
 }
 
 void expectRefused(const std::string& path, const std::vector<std::string>& parts, bool on_read = false) {
