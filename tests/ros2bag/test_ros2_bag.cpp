@@ -322,6 +322,24 @@ TEST(Ros2Bag, RunMcapOutputIsReadBackByTheMcapProjectsReader) {
   McapReader ours(mcap);
   EXPECT_TRUE(ours.indexed());
   EXPECT_EQ(ours.channels().size(), expected.size());
+
+  // convert-results writes the finished run folder as the same channels and poses.
+  const std::string again = (tmp.path() / "again.mcap").string();
+  const auto convert = ff::testing::runFlowfusion("convert-results '" + out + "' '" + again + "'");
+  ASSERT_EQ(convert.status, 0) << convert.output;
+  const nlohmann::json converted = readBackWithMcapCore(again);
+  for (const auto& [topic, want] : expected)
+    EXPECT_EQ(converted["channels"][topic]["messages"].get<size_t>(), want.second) << "convert-results " << topic;
+  ASSERT_EQ(converted["poses"].size(), got["poses"].size());
+  for (size_t i = 0; i < trajectory.size(); ++i) {
+    const std::vector<double> p = converted["poses"][i].get<std::vector<double>>();
+    const SE3 T = poseFromTranslationQuaternion(Eigen::Vector3d(p[1], p[2], p[3]), Eigen::Quaterniond(p[7], p[4], p[5], p[6]));
+    EXPECT_EQ(p[0], got["poses"][i][0].get<double>()) << i;
+    EXPECT_LT((T.matrix() - trajectory[i].T_world_cam.matrix()).cwiseAbs().maxCoeff(), 1e-9) << i;
+  }
+  const auto not_a_run = ff::testing::runFlowfusion("convert-results '" + fixture().dir + "' '" + again + "'");
+  EXPECT_EQ(not_a_run.status, 2) << not_a_run.output;
+  EXPECT_NE(not_a_run.output.find("summary.json"), std::string::npos) << not_a_run.output;
 }
 
 void expectRefused(const std::string& path, const std::vector<std::string>& parts, bool on_read = false) {

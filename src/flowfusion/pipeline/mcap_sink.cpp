@@ -136,32 +136,40 @@ void McapSink::frame(const RgbdFrame& frame, const FrameResult& result) {
 }
 
 void McapSink::end(RunSummary& summary, const FlowFusionSystem& system) {
-  const double t = summary.trajectory.empty() ? 0.0 : summary.trajectory.back().timestamp;
-  json poses = json::array();
-  for (const StampedPose& s : summary.trajectory) poses.push_back(pose(s.T_world_cam));
-  writer_->write(channels_->path, nanos(t), json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"poses", poses}}.dump());
-  if (const StaticMap* map = system.map()) {
-    std::vector<uint8_t> data;
+  std::vector<McapMapPoint> points;
+  if (const StaticMap* map = system.map())
     for (const Surfel& s : map->surfels()) {
       if (s.confidence < map->config().stable_confidence) continue;
-      const size_t at = data.size();
-      data.resize(at + 16);
-      std::memcpy(&data[at], s.position.data(), 12);
-      for (int k = 0; k < 3; ++k) data[at + 12 + k] = uint8_t(std::lround(s.bgr[2 - k]));  // red, green, blue
-      data[at + 15] = 255;
+      McapMapPoint p;
+      p.position = s.position;
+      for (int k = 0; k < 3; ++k) p.rgb[k] = uint8_t(std::lround(s.bgr[2 - k]));
+      points.push_back(p);
     }
-    const json fields = json::array({{{"name", "x"}, {"offset", 0}, {"type", 7}}, {{"name", "y"}, {"offset", 4}, {"type", 7}},
-                                     {{"name", "z"}, {"offset", 8}, {"type", 7}}, {{"name", "red"}, {"offset", 12}, {"type", 1}},
-                                     {{"name", "green"}, {"offset", 13}, {"type", 1}},
-                                     {{"name", "blue"}, {"offset", 14}, {"type", 1}},
-                                     {{"name", "alpha"}, {"offset", 15}, {"type", 1}}});
-    writer_->write(channels_->map, nanos(t),
-                   json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"pose", pose(SE3::Identity())},
-                        {"point_stride", 16}, {"fields", fields}, {"data", base64(data.data(), data.size())}}
-                       .dump());
-  }
-  writer_->close();
+  finish(summary.trajectory, points);
   summary.written.push_back(writer_->path());
+}
+
+void McapSink::finish(const Trajectory& trajectory, const std::vector<McapMapPoint>& map) {
+  const double t = trajectory.empty() ? 0.0 : trajectory.back().timestamp;
+  json poses = json::array();
+  for (const StampedPose& s : trajectory) poses.push_back(pose(s.T_world_cam));
+  writer_->write(channels_->path, nanos(t), json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"poses", poses}}.dump());
+  std::vector<uint8_t> data(map.size() * 16);
+  for (size_t i = 0; i < map.size(); ++i) {
+    std::memcpy(&data[i * 16], map[i].position.data(), 12);
+    std::memcpy(&data[i * 16 + 12], map[i].rgb, 3);
+    data[i * 16 + 15] = 255;
+  }
+  const json fields = json::array({{{"name", "x"}, {"offset", 0}, {"type", 7}}, {{"name", "y"}, {"offset", 4}, {"type", 7}},
+                                   {{"name", "z"}, {"offset", 8}, {"type", 7}}, {{"name", "red"}, {"offset", 12}, {"type", 1}},
+                                   {{"name", "green"}, {"offset", 13}, {"type", 1}},
+                                   {{"name", "blue"}, {"offset", 14}, {"type", 1}},
+                                   {{"name", "alpha"}, {"offset", 15}, {"type", 1}}});  // 7 FLOAT32, 1 UINT8
+  writer_->write(channels_->map, nanos(t),
+                 json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"pose", pose(SE3::Identity())},
+                      {"point_stride", 16}, {"fields", fields}, {"data", base64(data.data(), data.size())}}
+                     .dump());
+  writer_->close();
 }
 
 }  // namespace ff

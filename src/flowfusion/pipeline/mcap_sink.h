@@ -13,11 +13,19 @@
 #include <memory>
 #include <string>
 
+#include <vector>
+
 #include "flowfusion/pipeline/result_sink.h"
 
 namespace ff {
 
 class McapFileWriter;
+
+// A point of the map as /map holds it.
+struct McapMapPoint {
+  Eigen::Vector3f position;  // world, metres
+  uint8_t rgb[3] = {0, 0, 0};
+};
 
 class McapSink : public ResultSink {
  public:
@@ -26,7 +34,10 @@ class McapSink : public ResultSink {
   ~McapSink() override;
   void begin(const RunInfo& info) override;
   void frame(const RgbdFrame& frame, const FrameResult& result) override;
+  // finish() with the trajectory and the map's stable surfels; adds the file to summary.written.
   void end(RunSummary& summary, const FlowFusionSystem& system) override;
+  // Writes the path and the map and closes the file (convert-results calls it for a finished run).
+  void finish(const Trajectory& trajectory, const std::vector<McapMapPoint>& map);
 
  private:
   struct Channels;
