@@ -1,4 +1,4 @@
-// `flowfusion convert BAG OUT`: a ROS 1 bag written as a TUM-layout folder (io/bag_convert.h).
+// `flowfusion convert BAG OUT`: a ROS 1 or ROS 2 bag written as a TUM-layout folder (io/bag_convert.h).
 // SIGINT/SIGTERM stop it after the current frame with a marked partial result, as `run`.
 #include <iostream>
 #include <memory>
@@ -37,9 +37,9 @@ void convert(const Options& o) {
 const ff::app::RegisterCommand convert_command("55-convert", [](CLI::App& app) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "convert", "Write a ROS 1 bag as a TUM-layout folder (rgb/, depth/ 16-bit PNG at 5000 per metre, rgb.txt, "
+      "convert", "Write a ROS 1 or ROS 2 bag as a TUM-layout folder (rgb/, depth/ 16-bit PNG at 5000 per metre, rgb.txt, "
                  "depth.txt, camera.txt, summary.json)");
-  cmd->add_option("BAG", o->bag, "ROS 1 bag (.bag) with colour and depth image topics")->required();
+  cmd->add_option("BAG", o->bag, "ROS 1 bag (.bag) or ROS 2 bag (rosbag2 folder, .mcap, .db3) with colour and depth image topics")->required();
   cmd->add_option("OUT", o->out, "Output folder")->required();
   cmd->add_option("--rgb-topic", o->sequence.rgb_topic, "Colour topic (default: found by name)");
   cmd->add_option("--depth-topic", o->sequence.depth_topic, "Depth topic (default: found by name)");

@@ -11,6 +11,7 @@
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/mcap_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/report/report_sink.h"
 #include "flowfusion/report/viewer_sink.h"
@@ -35,7 +36,7 @@ class ProgressSink : public ResultSink {
 };
 
 struct RunCommand {
-  std::string sequence, out;
+  std::string sequence, out, mcap;
   bool overwrite = false, overlays = false, no_map = false, quiet = false, report = false, show = false;
   SystemOptions system;
 };
@@ -83,6 +84,12 @@ void execute(const RunCommand& c) {
   if (std::filesystem::is_directory(c.sequence)) report_options.sequence = c.sequence;
   report::ReportSink report(report_options);
   if (c.report) sinks.push_back(&report);  // after the files sink, whose files it reads
+  std::unique_ptr<McapSink> mcap;
+  if (!c.mcap.empty()) {
+    refuseOverlap(c.mcap, c.sequence, "the input sequence");
+    mcap = std::make_unique<McapSink>(c.mcap);
+    sinks.push_back(mcap.get());
+  }
   const StopSignals signals;
   const RunSummary s = runSequence(*source, config, sinks, {signals.flag(), signals.reason()});
   if (!s.complete) {
@@ -96,11 +103,13 @@ void execute(const RunCommand& c) {
 const RegisterCommand reg("1-run", [](CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
   CLI::App* cmd =
-      app.add_subcommand("run", "Track an RGB-D sequence (folder or ROS bag), segment moving objects, map the static scene");
-  cmd->add_option("sequence", c->sequence, "Sequence folder (TUM, Bonn, ICL-NUIM, ETH3D layouts) or .bag file")
+      app.add_subcommand("run", "Track an RGB-D sequence (folder, ROS 1 or ROS 2 bag), segment moving objects, map the static scene");
+  cmd->add_option("sequence", c->sequence, "Sequence folder (TUM, Bonn, ICL-NUIM, ETH3D layouts), ROS 1 .bag, or ROS 2 bag (rosbag2 folder, .mcap, .db3)")
       ->required();
   cmd->add_option("--out", c->out, "Output folder (trajectory.txt, masks/, map.ply, ...)")->required();
   cmd->add_flag("--overwrite", c->overwrite, "Write into a non-empty output folder");
+  cmd->add_option("--mcap", c->mcap,
+                  "Also write the run as an MCAP file for Foxglove (pose, path, colour, mask, depth, calibration, map)");
   cmd->add_flag("--overlays", c->overlays, "Also write overlays/<timestamp>.png (dynamic pixels in red)");
   cmd->add_flag("--no-map", c->no_map, "Skip map.ply, map_points.ply and preview/");
   cmd->add_flag("--quiet", c->quiet, "Print nothing on success");

@@ -24,5 +24,8 @@ set(CPACK_DEBIAN_PACKAGE_DEPENDS
 if(FLOWFUSION_ROSBAG_FOUND)
   string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", librosbag-storage-dev, libsensor-msgs-dev")
 endif()
+if(FLOWFUSION_ROS2BAG_FOUND)
+  string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", libzstd-dev, liblz4-dev, libsqlite3-dev")
+endif()
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 include(CPack)

@@ -1,5 +1,5 @@
 #pragma once
-// `flowfusion convert`: a ROS 1 bag (io/bag_reader.h) written as a TUM-layout folder that any
+// `flowfusion convert`: a ROS 1 or ROS 2 bag (io/bag_reader.h) written as a TUM-layout folder that any
 // TUM tool reads: rgb/ (8-bit BGR PNG as recorded, not undistorted), depth/ (16-bit PNG at 5000
 // units per metre, TUM's scale), rgb.txt and depth.txt (the header stamps), camera.txt (with the
 // lens distortion when there is one) and groundtruth.txt when options.groundtruth is given, and

@@ -1,24 +1,25 @@
 #pragma once
-// ROS 1 bags (format 2.0, uncompressed, bz2 or lz4 chunks) as RGB-D recordings: a colour topic
+// ROS bags as RGB-D recordings: ROS 1 bags (format 2.0, uncompressed, bz2 or lz4 chunks) and ROS 2
+// bags (a rosbag2 folder, or one .mcap or .db3 file; io/ros_recording.h says which code reads the
+// container and messages of each). A colour topic
 // (sensor_msgs/Image rgb8, bgr8, mono8, rgba8, bgra8, or sensor_msgs/CompressedImage png/jpeg),
 // a depth topic (sensor_msgs/Image 16UC1 or mono16 in raw units, 32FC1 in metres) and the camera
 // from sensor_msgs/CameraInfo. Colour and depth are associated by their header stamps as the
 // TUM folders are (io/tum_text.h associate()). Reading streams: open() reads each image message
 // once for its stamp and encoding and keeps only those; read() decodes one pair, so memory does
-// not grow with the bag's length. Built on Debian's librosbag-storage-dev; without it open()
-// throws an InputError saying how to enable bags (bagSupportBuilt()).
+// not grow with the bag's length. ROS 1 bags need Debian's librosbag-storage-dev, ROS 2 bags
+// libzstd-dev, liblz4-dev and libsqlite3-dev; without them open() throws an InputError saying how to
+// enable the format (bagSupportBuilt(), ros2BagSupportBuilt()).
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/io/ros_recording.h"
 #include "flowfusion/io/tum_sequence.h"
 
 namespace ff {
-
-// Whether this build reads bags.
-bool bagSupportBuilt();
 
 // One associated colour-depth pair as stored in the bag (before any undistortion).
 struct BagFrame {

@@ -33,7 +33,8 @@ FrameRange parseFrameRange(const std::string& text) {
 
 std::unique_ptr<FrameSource> openFrameSource(const std::string& path, const SequenceOptions& options,
                                              FrameRange range) {
-  if (std::filesystem::path(path).extension() == ".bag") return std::make_unique<BagSource>(path, options, range);
+  if (std::filesystem::path(path).extension() == ".bag" || isRos2BagPath(path))
+    return std::make_unique<BagSource>(path, options, range);
   return std::make_unique<TumFolderSource>(TumSequence::open(path, options), range);
 }
 

@@ -42,7 +42,8 @@ struct FrameRange {
 FrameRange parseFrameRange(const std::string& text);
 
 struct SequenceOptions;
-// The source for `path` by what it is: a ROS 1 bag when it ends in .bag (io/bag_source.h), else a
+// The source for `path` by what it is: a ROS 1 bag when it ends in .bag, a ROS 2 bag when it is a
+// .mcap or .db3 file or a folder with metadata.yaml (io/bag_source.h), else a
 // TUM-layout folder (io/tum_sequence.h, with the datasets of io/dataset_layout.h). Throws
 // InputError saying what was looked for when nothing applies.
 std::unique_ptr<FrameSource> openFrameSource(const std::string& path, const SequenceOptions& options,
