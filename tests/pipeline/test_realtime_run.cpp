@@ -1,17 +1,20 @@
 // Runs from live sources (`run --realtime`, a camera, a ROS node): a forced slow stage makes the run
 // drop frames instead of queueing them, the counts add up, dropped frames are not in the
 // trajectory, a live source that drops nothing gives the offline run's poses, and the figures reach
-// the sinks after every frame and the summary at the end.
+// the sinks after every frame and the summary at the end. pipeline.budget_ms: a frame past it
+// skips its optional parts, a budget never reached changes nothing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
 #include <thread>
 
+#include "flowfusion/core/error.h"
 #include "flowfusion/io/live_frame_queue.h"
 #include "flowfusion/io/realtime_replay.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
 
 namespace ff {
 namespace {
@@ -133,6 +136,43 @@ TEST(RealtimeRun, OnlyALiveRunsSummaryHasTheLiveFigures) {
     EXPECT_TRUE(live.contains(key)) << key;
   EXPECT_EQ(live["frames_processed"].get<size_t>(), live["frames"].get<size_t>());
   EXPECT_EQ(live["frames_offered"].get<size_t>(), 3u);
+}
+
+// Keeps each frame's segmentation rounds.
+struct RoundsSink : ResultSink {
+  std::vector<int> rounds;
+  void frame(const RgbdFrame&, const FrameResult& r) override { rounds.push_back(r.iterations); }
+};
+
+TEST(FrameBudget, AFramePastItsBudgetSkipsLaterRoundsAndLeavesItsFusionToTheNext) {
+  SceneSource recording(12);
+  SystemConfig config;
+  config.pipeline.budget_ms = 1e-3;  // every frame is past it
+  RoundsSink rounds;
+  const RunSummary s = runSequence(recording, config, {&rounds});
+  ASSERT_EQ(rounds.rounds.size(), 12u);
+  for (size_t i = 1; i < rounds.rounds.size(); ++i) EXPECT_EQ(rounds.rounds[i], 1) << "frame " << i;
+  // fusion_every 2: each fusion waits until 4 frames went unfused (frames 2, 6, 10).
+  EXPECT_EQ(s.timings.samples("fusion").size(), 3u);
+  EXPECT_GT(s.map_surfels, 0u);
+}
+
+TEST(FrameBudget, ABudgetNoFrameReachesChangesNothing) {
+  SceneSource plain_recording(6), budget_recording(6);
+  SystemConfig config;
+  config.pipeline.budget_ms = 1e6;
+  const RunSummary plain = runSequence(plain_recording, SystemConfig{}, {});
+  const RunSummary budget = runSequence(budget_recording, config, {});
+  ASSERT_EQ(plain.trajectory.size(), budget.trajectory.size());
+  for (size_t i = 0; i < plain.trajectory.size(); ++i)
+    EXPECT_TRUE(plain.trajectory[i].T_world_cam.matrix() == budget.trajectory[i].T_world_cam.matrix()) << i;
+  EXPECT_EQ(plain.map_surfels, budget.map_surfels);
+}
+
+TEST(FrameBudget, ANegativeBudgetIsAnErrorNamingTheSetting) {
+  SystemConfig config;
+  config.pipeline.budget_ms = -1;
+  EXPECT_NE(testing::inputErrorOf([&] { validate(config); }).find("pipeline.budget_ms"), std::string::npos);
 }
 
 }  // namespace
