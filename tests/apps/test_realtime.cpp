@@ -1,6 +1,7 @@
 // `flowfusion run --realtime [--rate R]` through the executable: a replay far faster than the
 // system drops frames instead of queueing them, the counts in summary.json add up, the dropped
-// frames have neither a pose nor a mask, and a bad --rate is an error naming the option.
+// frames have neither a pose nor a mask, a stopped live run's counts add up too, and a bad --rate
+// is an error naming the option.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -58,6 +59,23 @@ TEST_F(RealtimeCommand, AFarTooFastReplayDropsFramesAndTheirPosesAndMasks) {
   size_t masks = 0;
   for (const auto& entry : fs::directory_iterator(out("fast") + "/masks")) masks += entry.path().extension() == ".png";
   EXPECT_EQ(masks, processed) << "a dropped frame has no mask";
+}
+
+TEST_F(RealtimeCommand, AnInterruptedLiveRunsCountsAddUp) {
+  // A fifth of the recorded speed (3.2 s): SIGINT arrives once a few masks exist, before the end.
+  const std::string dir = out("stopped");
+  const std::string script = std::string(FLOWFUSION_APP_PATH) + " run " + seq() + " --out " + dir +
+                             " --realtime --rate 0.2 & pid=$!; for i in $(seq 600); do n=$(ls " + dir +
+                             "/masks 2>/dev/null | wc -l); [ \"$n\" -ge 3 ] && break; sleep 0.05; done; kill -INT $pid; "
+                             "wait $pid";
+  const auto r = testing::runShell(script);
+  EXPECT_EQ(r.status, 130) << r.output;
+  const nlohmann::json summary = readJsonFile(dir + "/summary.json");
+  EXPECT_FALSE(summary["complete"].get<bool>());
+  const size_t offered = summary["frames_offered"].get<size_t>();
+  const size_t processed = summary["frames_processed"].get<size_t>();
+  EXPECT_EQ(processed + summary["frames_dropped"].get<size_t>(), offered);
+  EXPECT_EQ(readTrajectory(dir + "/trajectory.txt").size(), processed);
 }
 
 TEST_F(RealtimeCommand, AnOfflineRunsSummaryHasNoLiveFigures) {
