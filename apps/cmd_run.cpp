@@ -1,15 +1,21 @@
 // `flowfusion run SEQUENCE --out DIR`: frames from a source, through the system, to the files
 // sink (and a progress line). SIGINT/SIGTERM stop it after the current frame with an honest,
-// marked partial result.
+// marked partial result. `--realtime [--rate R]` replays the recording as a live camera
+// (io/realtime_replay.h): the frames the system is too slow for are dropped, and the run reports
+// what it processed, dropped and the latency.
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
+#include <sstream>
 
 #include "command.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
+#include "flowfusion/io/realtime_replay.h"
 #include "flowfusion/pipeline/files_sink.h"
 #include "flowfusion/pipeline/mcap_sink.h"
 #include "flowfusion/pipeline/run.h"
@@ -21,25 +27,55 @@
 namespace ff::app {
 namespace {
 
-// "frame N/M" on a terminal.
+// "offered 120, processed 80, dropped 40 (33 %), latency p50 35.1 ms, p95 60.2 ms".
+std::string liveLine(const LiveFigures& f) {
+  const double dropped_percent =
+      f.frames_offered > 0 ? 100.0 * static_cast<double>(f.frames_dropped) / static_cast<double>(f.frames_offered) : 0;
+  char line[160];
+  std::snprintf(line, sizeof line, "offered %zu, processed %zu, dropped %zu (%.0f %%), latency p50 %.1f ms, p95 %.1f ms",
+                f.frames_offered, f.frames_processed, f.frames_dropped, dropped_percent, f.latency_ms_p50,
+                f.latency_ms_p95);
+  return line;
+}
+
+// "frame N/M" on a terminal; a live run's figures instead (RunInfo::live).
 class ProgressSink : public ResultSink {
  public:
-  void begin(const RunInfo& info) override { total_ = info.expected_frames.value_or(0); }
+  void begin(const RunInfo& info) override {
+    total_ = info.expected_frames.value_or(0);
+    live_ = info.live;
+  }
   void frame(const RgbdFrame&, const FrameResult&) override {
     ++done_;
-    if (done_ % 10 == 0 || done_ == total_) std::fprintf(stderr, "\rframe %zu/%zu", done_, total_);
+    if (done_ % 10 != 0 && done_ != total_) return;
+    if (live_)
+      std::fprintf(stderr, "\r%s   ", liveLine(*live_).c_str());
+    else
+      std::fprintf(stderr, "\rframe %zu/%zu", done_, total_);
   }
   void end(RunSummary&, const FlowFusionSystem&) override { std::fprintf(stderr, "\n"); }
 
  private:
   size_t done_ = 0, total_ = 0;
+  const LiveFigures* live_ = nullptr;
 };
 
 struct RunCommand {
   std::string sequence, out, mcap;
   bool overwrite = false, overlays = false, no_map = false, quiet = false, report = false, show = false;
+  bool realtime = false;
+  double rate = 1.0;  // --rate: times the recorded speed
   SystemOptions system;
 };
+
+// --rate as a RealtimeReplay takes it: a positive, finite factor.
+void checkRate(double rate) {
+  if (std::isfinite(rate) && rate > 0) return;
+  std::ostringstream got;
+  got << rate;
+  throw InputError("--rate must be a positive, finite factor of the recorded speed (e.g. 0.5, 1, 2), got " +
+                   got.str());
+}
 
 void printSummary(const RunSummary& s, const FrameSource& source) {
   std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
@@ -55,6 +91,7 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
       std::printf("ATE: not computed: %s\n", e.what());  // e.g. too few poses to align
     }
   }
+  if (s.live) std::printf("real time: %s\n", liveLine(*s.live).c_str());
   std::printf("map: %zu surfels%s; peak memory %.0f MiB\n", s.map_surfels,
               s.map_budget_reached ? " (budget reached: raise fusion.max_surfels for more)" : "", s.peak_memory_mib);
   for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
@@ -64,6 +101,7 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
 }
 
 void execute(const RunCommand& c) {
+  if (c.realtime) checkRate(c.rate);
   const SystemConfig config = c.system.systemConfig();
   FilesSinkOptions files;
   files.out_dir = c.out;
@@ -73,7 +111,10 @@ void execute(const RunCommand& c) {
   FilesSink sink(files);
   refuseOverlap(c.out, c.sequence, "the input sequence");
   setOutputCommand("run");
-  const std::unique_ptr<FrameSource> source = c.system.openSource(c.sequence);
+  const std::unique_ptr<FrameSource> recording = c.system.openSource(c.sequence);
+  std::optional<RealtimeReplay> replay;
+  if (c.realtime) replay.emplace(*recording, c.rate);
+  FrameSource& source = replay ? static_cast<FrameSource&>(*replay) : *recording;
   ProgressSink progress;
   std::vector<ResultSink*> sinks = {&sink};
   if (!c.quiet && isatty(fileno(stderr))) sinks.push_back(&progress);
@@ -91,13 +132,13 @@ void execute(const RunCommand& c) {
     sinks.push_back(mcap.get());
   }
   const StopSignals signals;
-  const RunSummary s = runSequence(*source, config, sinks, {signals.flag(), signals.reason()});
+  const RunSummary s = runSequence(source, config, sinks, {signals.flag(), signals.reason()});
   if (!s.complete) {
     std::fprintf(stderr, "flowfusion: run stopped after %zu frames: %s; partial results in %s (summary.json says so)\n",
                  s.frames, s.stop_reason.c_str(), c.out.c_str());
     throw ExitStatus{signals.exitStatus()};
   }
-  if (!c.quiet) printSummary(s, *source);
+  if (!c.quiet) printSummary(s, source);
 }
 
 const RegisterCommand reg("1-run", [](CLI::App& app) {
@@ -115,6 +156,12 @@ const RegisterCommand reg("1-run", [](CLI::App& app) {
   cmd->add_flag("--quiet", c->quiet, "Print nothing on success");
   cmd->add_flag("--report", c->report, "Also write OUT/report.html (see `flowfusion report`)");
   cmd->add_flag("--show", c->show, "Show the frame with its mask, the dynamic score and the path while running");
+  CLI::Option* realtime = cmd->add_flag(
+      "--realtime", c->realtime,
+      "Replay as a live camera: frames offered at their recorded times, those arriving while the system is busy "
+      "replace the waiting one (dropped); summary.json adds frames_offered/processed/dropped and latency_ms_p50/p95");
+  cmd->add_option("--rate", c->rate, "With --realtime: times the recorded speed (default 1; 2 = twice as fast)")
+      ->needs(realtime);
   c->system.addTo(cmd);
   cmd->callback([c]() { execute(*c); });
 });

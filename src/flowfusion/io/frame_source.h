@@ -3,6 +3,7 @@
 // A source hands out RGB-D frames in time order with the pinhole camera they are in; the TUM
 // folder is one implementation, a bag, a live camera or Python feed frames the same way
 // (in the manner of Kimera-VIO's DataProviderInterface).
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <string>
@@ -12,6 +13,14 @@
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff {
+
+// What a live source (frames arriving on their own clock, io/live_frame_queue.h) has seen so far.
+struct Arrivals {
+  size_t offered = 0;  // frames that arrived
+  size_t dropped = 0;  // frames replaced by a newer one before the system took them
+  // When the frame next() returned last arrived (steady clock): the start of its latency.
+  std::chrono::steady_clock::time_point last_offered_at;
+};
 
 class FrameSource {
  public:
@@ -31,6 +40,9 @@ class FrameSource {
   virtual const Trajectory* groundtruth() const { return nullptr; }
   // Folder of ground-truth dynamic masks (<timestamp>.png) when the source carries them.
   virtual std::optional<std::string> masksDir() const { return std::nullopt; }
+  // A live source's arrivals; nullopt for a source read as fast as the system asks. A live
+  // source is never read ahead (runSequence): that would be the backlog it exists to avoid.
+  virtual std::optional<Arrivals> arrivals() const { return std::nullopt; }
 };
 
 // A span of a recording's frames by index: "FIRST:LAST", "FIRST:" or ":LAST" (inclusive).

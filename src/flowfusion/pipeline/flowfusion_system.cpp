@@ -29,7 +29,8 @@ FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntri
       camera_(camera),
       odometry_(config.odometry),
       targets_(config.pipeline, config.odometry, camera),
-      T_world_first_(T_world_first) {
+      T_world_first_(T_world_first),
+      frames_since_fusion_(config_.pipeline.fusion_every) {
   if (config_.pipeline.segmentation) segmentation_ = std::make_unique<SegmentationLoop>(config_, camera_);
   if (config_.pipeline.fusion) map_ = std::make_unique<StaticMap>(config_.fusion);
 }
@@ -60,6 +61,9 @@ const Timings& FlowFusionSystem::timings() const {
 
 FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   const Clock::time_point start = Clock::now();
+  if (config_.pipeline.budget_ms > 0)
+    deadline_ = start + std::chrono::duration_cast<Clock::duration>(
+                            std::chrono::duration<double, std::milli>(config_.pipeline.budget_ms));
   FrameResult result;
   result.timestamp = frame.timestamp;
   timings_.beginFrame(frame.timestamp);
@@ -77,7 +81,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, config_.pipeline.mask_threshold);
   result.scores = scores;
-  startFusion(frame, result.T_world_cam, full_scores);
+  startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
   // A new model keyframe is the map rendered at this frame's pose, this frame's fusion included.
   if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok, !scores.empty())) finishFusion();
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
@@ -111,7 +115,7 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
     timings_.add("flow", cues.flow_ms);
     timings_.add("clustering", cues.clustering_ms);
     finishFusion();  // the loop reads the map
-    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get()}, cues, estimate, timings_);
+    segmentation_->run({frame, cur, prev, target, T_target_prev, map_.get(), deadline_}, cues, estimate, timings_);
     result.restarted_from_flow = estimate.restarted_from_flow;
     result.iterations = estimate.rounds;
     flow_restarts_ += estimate.restarted_from_flow;
@@ -148,9 +152,15 @@ MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, Trackin
   return e;
 }
 
-void FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores) {
-  // trajectory_ holds one pose per frame processed before this one.
-  if (!map_ || trajectory_.size() % static_cast<size_t>(config_.pipeline.fusion_every) != 0) return;
+void FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores,
+                                   bool late) {
+  const int every = config_.pipeline.fusion_every;
+  const bool due = frames_since_fusion_ >= every;
+  if (!map_ || !due || (late && frames_since_fusion_ < 2 * every)) {
+    ++frames_since_fusion_;
+    return;
+  }
+  frames_since_fusion_ = 1;
   finishFusion();
   fusion_ = std::async(std::launch::async, [this, frame, T_world_cam, weights = staticWeights(full_scores)] {
     const Clock::time_point start = Clock::now();

@@ -2,6 +2,7 @@
 // The per-frame FlowFusion system (paper Fig. 1): robust odometry against a tracking target, the
 // segmentation loop (flow, clusters, dynamic scores, weighted odometry), fusion of the static
 // background into a surfel map. docs/design.md draws the pipeline and its frame conventions.
+#include <chrono>
 #include <future>
 #include <memory>
 #include <string>
@@ -68,8 +69,9 @@ class FlowFusionSystem {
                                const SE3& T_prev_cur_guess, const cv::Mat& carried, FrameResult& result);
   // Odometry and segmentation against the target; returns the scores (empty without segmentation).
   cv::Mat track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
-  // Starts fusing the frame into the map on a worker thread (every fusion_every frames).
-  void startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores);
+  // Starts fusing the frame into the map on a worker thread (every fusion_every frames; a frame
+  // past its budget leaves it to the next, up to 2 x fusion_every frames unfused).
+  void startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores, bool late);
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.
@@ -88,6 +90,9 @@ class FlowFusionSystem {
   // Mutable: the const accessors wait for the background fusion and record its time.
   mutable Timings timings_;
   std::vector<double> frame_ms_;
+  // When the frame being processed runs out of pipeline.budget_ms (max(): no budget).
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::time_point::max();
+  int frames_since_fusion_;  // processed frames since the last fusion, this one included
   int failures_ = 0;
   int flow_restarts_ = 0;
   // The fusion running on a worker (its duration in ms); last, so it ends before the map goes.

@@ -13,12 +13,26 @@
 
 namespace ff {
 
+// A live run's figures (a source with arrivals(): `run --realtime`, a live camera or ROS node):
+// what a user reads to learn whether the machine keeps up with the sensor.
+struct LiveFigures {
+  size_t frames_offered = 0;    // frames the source has seen arrive
+  size_t frames_processed = 0;  // frames the system processed (the trajectory's poses)
+  // Offered, not processed: replaced by a newer frame while the system was busy; at the end also a
+  // frame still waiting, or taken and not processed, when the run stopped (offered - processed).
+  size_t frames_dropped = 0;
+  double latency_ms_p50 = 0;  // a frame's arrival to its FrameResult, median over processed frames
+  double latency_ms_p95 = 0;  // the same, 95th percentile (linear between ranks, as numpy)
+};
+
 struct RunInfo {
   std::string source;                   // FrameSource::name()
   const FrameSource* frames = nullptr;  // raw pixels, ground truth
   SystemConfig config;
   CameraIntrinsics camera;
   std::optional<size_t> expected_frames;  // when the source knows
+  // A live source's figures, updated by runSequence before every frame() call; null otherwise.
+  const LiveFigures* live = nullptr;
 };
 
 struct RunSummary {
@@ -36,12 +50,14 @@ struct RunSummary {
   double peak_memory_mib = 0;
   size_t map_surfels = 0;
   bool map_budget_reached = false;
+  std::optional<LiveFigures> live;   // a live source's figures at the end
   std::vector<std::string> written;  // files and folders the sinks wrote
   std::vector<std::string> notes;    // what a user should know (e.g. why no mesh was written)
 };
 
 // The summary's figures as summary.json holds them (complete, stop_reason when not, frames, failures,
-// restarts, rounds, map, memory, load and export times, per-stage timings, notes).
+// restarts, rounds, map, memory, load and export times, per-stage timings, notes; a live run's
+// frames_offered, frames_processed, frames_dropped, latency_ms_p50 and latency_ms_p95).
 nlohmann::json toJson(const RunSummary& summary);
 
 class ResultSink {

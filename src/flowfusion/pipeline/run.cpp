@@ -1,6 +1,8 @@
 #include "flowfusion/pipeline/run.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 
 #include "flowfusion/core/timings.h"
@@ -30,6 +32,13 @@ nlohmann::json toJson(const RunSummary& summary) {
   j["frame_ms_median"] = summary.frame_ms_median;
   j["export_ms"] = summary.export_ms;
   j["timings"] = summary.timings.toJson()["stages"];
+  if (summary.live) {
+    j["frames_offered"] = summary.live->frames_offered;
+    j["frames_processed"] = summary.live->frames_processed;
+    j["frames_dropped"] = summary.live->frames_dropped;
+    j["latency_ms_p50"] = summary.live->latency_ms_p50;
+    j["latency_ms_p95"] = summary.live->latency_ms_p95;
+  }
   j["notes"] = summary.notes;
   return j;
 }
@@ -45,7 +54,56 @@ std::optional<RgbdFrame> nextFrame(FrameSource& source, std::vector<double>& loa
   return frame;
 }
 
-void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms) {
+// The q-quantile (q in [0, 1]) of sorted values, linear between ranks as numpy's default; 0 when empty.
+double quantileOfSorted(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0;
+  const double rank = q * static_cast<double>(sorted.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(rank));
+  const size_t above = std::min(below + 1, sorted.size() - 1);
+  return sorted[below] + (rank - static_cast<double>(below)) * (sorted[above] - sorted[below]);
+}
+
+// A live source's figures as the run goes: each processed frame's latency from its arrival (kept
+// sorted, so the percentiles are at hand for the sinks after every frame) and the source's counts.
+class LiveMeter {
+ public:
+  explicit LiveMeter(const FrameSource& source) : source_(source) {}
+
+  // Right after the frame next() returned last was processed.
+  void processed() {
+    const Arrivals a = *source_.arrivals();
+    const double latency_ms = msSince(a.last_offered_at);
+    sorted_latency_ms_.insert(std::upper_bound(sorted_latency_ms_.begin(), sorted_latency_ms_.end(), latency_ms),
+                              latency_ms);
+    update(a, a.dropped);
+  }
+  // At the end: every frame offered and not processed counts as dropped.
+  void finish() {
+    const Arrivals a = *source_.arrivals();
+    update(a, a.offered - std::min(a.offered, sorted_latency_ms_.size()));
+  }
+  const LiveFigures& figures() const { return figures_; }
+
+ private:
+  void update(const Arrivals& a, size_t dropped) {
+    figures_.frames_offered = a.offered;
+    figures_.frames_processed = sorted_latency_ms_.size();
+    figures_.frames_dropped = dropped;
+    figures_.latency_ms_p50 = quantileOfSorted(sorted_latency_ms_, 0.5);
+    figures_.latency_ms_p95 = quantileOfSorted(sorted_latency_ms_, 0.95);
+  }
+
+  const FrameSource& source_;
+  std::vector<double> sorted_latency_ms_;
+  LiveFigures figures_;
+};
+
+void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms,
+               std::optional<LiveMeter>& live) {
+  if (live) {
+    live->finish();
+    s.live = live->figures();
+  }
   if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
   s.trajectory = system.trajectory();
   s.tracking_failures = system.trackingFailures();
@@ -69,10 +127,13 @@ void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFu
 RunSummary runSequence(FrameSource& source, const SystemConfig& config, const std::vector<ResultSink*>& sinks,
                        const RunControl& control) {
   validate(config);
-  const RunInfo info{source.name(), &source, config, source.camera(), source.remaining()};
+  std::optional<LiveMeter> live;
+  if (source.arrivals()) live.emplace(source);
+  const RunInfo info{source.name(), &source, config, source.camera(), source.remaining(),
+                     live ? &live->figures() : nullptr};
   for (ResultSink* sink : sinks) sink->begin(info);
-  std::optional<PrefetchingSource> prefetching;
-  if (control.prefetch_frames > 0) prefetching.emplace(source, control.prefetch_frames);
+  std::optional<PrefetchingSource> prefetching;  // never for a live source: a backlog of frames
+  if (control.prefetch_frames > 0 && !live) prefetching.emplace(source, control.prefetch_frames);
   FrameSource& frames = prefetching ? static_cast<FrameSource&>(*prefetching) : source;
   std::vector<double> load_ms;
   std::unique_ptr<FlowFusionSystem> system;
@@ -88,6 +149,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       if (!system)
         system = std::make_unique<FlowFusionSystem>(config, source.camera(), initialPose(source, frame->timestamp));
       const FrameResult r = system->process(*frame);
+      if (live) live->processed();
       for (ResultSink* sink : sinks) sink->frame(*frame, r);
       ++summary.frames;
       summary.mean_rounds += r.iterations;
@@ -96,7 +158,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
     summary.complete = false;
     summary.stop_reason = e.what();
     if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-    summarise(summary, *system, load_ms);
+    summarise(summary, *system, load_ms, live);
     try {
       endSinks(sinks, summary, *system);
     } catch (const std::exception&) {
@@ -105,7 +167,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
     throw;
   }
   if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-  summarise(summary, *system, load_ms);
+  summarise(summary, *system, load_ms, live);
   endSinks(sinks, summary, *system);
   return summary;
 }

@@ -24,6 +24,9 @@ SE3 initialPose(const FrameSource& source, double timestamp);
 
 // Processes every frame of `source`. A frame that throws (also one the read-ahead failed to read)
 // ends the sinks with an incomplete summary (the frames before it kept) and is rethrown.
+// A live source (FrameSource::arrivals(): io/live_frame_queue.h, io/realtime_replay.h) is not read
+// ahead; the run measures each frame's latency from its arrival to its FrameResult and keeps the
+// LiveFigures for the sinks (RunInfo::live, updated before each frame()) and the summary.
 RunSummary runSequence(FrameSource& source, const SystemConfig& config, const std::vector<ResultSink*>& sinks,
                        const RunControl& control = {});
 

@@ -192,6 +192,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   }
   DynamicScores scores;
   for (int round = 0; round < opt.max_iterations; ++round) {
+    if (round > 0 && std::chrono::steady_clock::now() > in.deadline) break;
     {
       StageTimer timer(timings, "scores");
       const PixelResiduals pr = computePixelResiduals(in.cur, *in.target.odo, estimate.T_target_cur, level,

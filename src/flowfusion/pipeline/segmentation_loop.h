@@ -9,6 +9,7 @@
 // Frames: the paper's frame A, whose pixels carry clusters and scores, is the CURRENT frame (the
 // odometry's source); the target is the tracking target (previous frame, keyframe or the map's
 // prediction), so each frame's mask and weights live in its own pixels.
+#include <chrono>
 #include <memory>
 
 #include "flowfusion/core/timings.h"
@@ -38,6 +39,8 @@ struct SegmentationInput {
   const TrackingTarget& target;
   SE3 T_target_prev;
   const StaticMap* map;  // null without fusion
+  // Past it (pipeline.budget_ms), no round after the first starts; the default never comes.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 // What the loop needs of the current frame that depends neither on the odometry nor on the map:

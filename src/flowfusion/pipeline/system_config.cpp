@@ -27,6 +27,8 @@ void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
   if (p.fusion_every < 1 || p.fusion_every > 1000) throw InputError("pipeline.fusion_every must be 1 to 1000");
   if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
     throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");
+  if (!(p.budget_ms >= 0 && p.budget_ms <= 1e6))
+    throw InputError("pipeline.budget_ms must be 0 (no budget) to 1e6 (milliseconds per frame)");
 }
 
 }  // namespace

@@ -55,13 +55,18 @@ struct PipelineOptions {
   bool shift_to_colour_time = true;
   // Fraction of the frame's depth pixels a map prediction must cover to serve as a target.
   double model_min_valid_fraction = 0.5;
+  // ms a frame may take (0: no budget). Past it, the frame skips its optional parts, so a machine
+  // behind a live camera catches up (run --realtime): segmentation rounds after the first, and its
+  // fusion, which the next frame then does (never more than 2 x fusion_every frames unfused).
+  // Results then depend on the machine's speed; 0 keeps them reproducible (docs/tuning.md#budget_ms).
+  double budget_ms = 0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
-                                                model_min_valid_fraction)
+                                                model_min_valid_fraction, budget_ms)
 
 struct SystemConfig {
   PipelineOptions pipeline;
