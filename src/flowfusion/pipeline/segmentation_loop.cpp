@@ -169,6 +169,12 @@ SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationIn
   return e;
 }
 
+ScoreConfig SegmentationLoop::scoreConfigFor(const TrackingTarget& target) const {
+  ScoreConfig c = config_.scores;
+  if (!target.from_model) c.model_motion_cue = ModelMotionCue::kAnyTerm;
+  return c;
+}
+
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
                                    MotionEstimate& estimate, Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
@@ -204,7 +210,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_F = relativeToFrameError(
           flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur),
           config_.scores.flow_error_px);
-      scores = computeDynamicScores(graph, res, config_.scores);
+      scores = computeDynamicScores(graph, res, scoreConfigFor(in.target));
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);
     }

@@ -49,11 +49,12 @@ struct ScoreConfig {
   // That motion evidence: Eq. 10's delta above this in one cluster of the group, between theta_b
   // and theta_t (docs/tuning.md#model_motion_delta).
   double model_motion_delta = 0.15;
-  // What may show that motion first. r_D compares the depth with a target whose surfaces partly
-  // come from the map, so a static surface the map lacks (come into view, or flagged once) has a
-  // depth residual and a model occlusion term at once, each confirming the other in every frame:
-  // on real frames the flow, an independent cue, starts a group's motion (and its memory); the
-  // depth keeps a remembered group moving, so a person who sat down stays dynamic.
+  // What may show that motion first. Against a target built from the map (a model keyframe) r_D
+  // compares the depth with the map's surfaces, so a static surface the map lacks (come into view,
+  // or flagged once) has a depth residual and a model occlusion term at once, each confirming the
+  // other in every frame (real fr1/rpy): there the flow, an independent cue, starts a group's
+  // motion and its memory, and the depth keeps a remembered group moving (a person who sat down
+  // stays dynamic). Against a plain frame the segmentation loop lets any term start it.
   ModelMotionCue model_motion_cue = ModelMotionCue::kFlow;
   // Static evidence (our extension): a cluster agreeing with the stable map over a fraction a of
   // its pixels has its motion delta scaled by (1 - model_agreement * a) (docs/tuning.md#agreement).
