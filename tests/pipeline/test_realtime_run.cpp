@@ -14,38 +14,13 @@
 #include "flowfusion/io/realtime_replay.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "synth_source.h"
 #include "testing/test_util.h"
 
 namespace ff {
 namespace {
 
-// Frames of a small synthetic dynamic scene at 30 Hz.
-class SceneSource : public FrameSource {
- public:
-  explicit SceneSource(int frames) {
-    synth::SynthConfig c;
-    c.frames = frames;
-    c.width = 160;
-    c.height = 120;
-    scene_ = std::make_unique<synth::SyntheticScene>(c);
-  }
-  const CameraIntrinsics& camera() const override { return scene_->camera(); }
-  std::optional<RgbdFrame> next() override {
-    if (next_ == scene_->frameCount()) return std::nullopt;
-    return scene_->render(next_++).frame;
-  }
-  std::optional<size_t> remaining() const override { return scene_->frameCount() - next_; }
-  std::string name() const override { return "scene"; }
-  std::vector<double> stamps() const {
-    std::vector<double> s;
-    for (int i = 0; i < scene_->frameCount(); ++i) s.push_back(scene_->timestamp(i));
-    return s;
-  }
-
- private:
-  std::unique_ptr<synth::SyntheticScene> scene_;
-  int next_ = 0;
-};
+using testing::SynthSource;
 
 // A stage slower than the camera: each frame holds the run for `stage_ms`. Keeps the stamps it saw.
 struct SlowStageSink : ResultSink {
@@ -58,7 +33,7 @@ struct SlowStageSink : ResultSink {
 };
 
 TEST(RealtimeRun, AForcedSlowStageDropsFramesInsteadOfQueueing) {
-  SceneSource recording(12);
+  SynthSource recording(12);
   const std::vector<double> recorded = recording.stamps();
   RealtimeReplay replay(recording, 1.0);
   SlowStageSink slow;
@@ -86,7 +61,7 @@ TEST(RealtimeRun, AForcedSlowStageDropsFramesInsteadOfQueueing) {
 // Offers the next recorded frame only once the run has processed the previous one: a live source
 // that never has to drop.
 struct LockstepSink : ResultSink {
-  SceneSource* recording = nullptr;
+  SynthSource* recording = nullptr;
   LiveFrameQueue* queue = nullptr;
   const LiveFigures* live = nullptr;
   std::vector<LiveFigures> seen;
@@ -101,7 +76,7 @@ struct LockstepSink : ResultSink {
 };
 
 TEST(RealtimeRun, ALiveSourceThatDropsNothingGivesTheOfflineRunsPoses) {
-  SceneSource offline_recording(6), live_recording(6);
+  SynthSource offline_recording(6), live_recording(6);
   const RunSummary offline = runSequence(offline_recording, SystemConfig{}, {});
   LiveFrameQueue queue(live_recording.camera(), "live");
   queue.offer(*live_recording.next());
@@ -124,7 +99,7 @@ TEST(RealtimeRun, ALiveSourceThatDropsNothingGivesTheOfflineRunsPoses) {
 }
 
 TEST(RealtimeRun, OnlyALiveRunsSummaryHasTheLiveFigures) {
-  SceneSource recording(3), live_recording(3);
+  SynthSource recording(3), live_recording(3);
   const nlohmann::json offline = toJson(runSequence(recording, SystemConfig{}, {}));
   EXPECT_FALSE(offline.contains("frames_offered"));
   RealtimeReplay replay(live_recording, 4.0);
@@ -142,7 +117,7 @@ struct RoundsSink : ResultSink {
 };
 
 TEST(FrameBudget, AFramePastItsBudgetSkipsLaterRoundsAndLeavesItsFusionToTheNext) {
-  SceneSource recording(12);
+  SynthSource recording(12);
   SystemConfig config;
   config.pipeline.budget_ms = 1e-3;  // every frame is past it
   RoundsSink rounds;
@@ -155,7 +130,7 @@ TEST(FrameBudget, AFramePastItsBudgetSkipsLaterRoundsAndLeavesItsFusionToTheNext
 }
 
 TEST(FrameBudget, ABudgetNoFrameReachesChangesNothing) {
-  SceneSource plain_recording(6), budget_recording(6);
+  SynthSource plain_recording(6), budget_recording(6);
   SystemConfig config;
   config.pipeline.budget_ms = 1e6;
   const RunSummary plain = runSequence(plain_recording, SystemConfig{}, {});

@@ -12,6 +12,7 @@
 #include "flowfusion/pipeline/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "synth_source.h"
 #include "testing/test_util.h"
 
 namespace ff {
@@ -19,29 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Frames of a small synthetic scene; throws at frame `fail_at` when set.
-class SynthSource : public FrameSource {
- public:
-  explicit SynthSource(int frames, int fail_at = -1) : fail_at_(fail_at) {
-    synth::SynthConfig c;
-    c.frames = frames;
-    c.width = 160;
-    c.height = 120;
-    scene_ = std::make_unique<synth::SyntheticScene>(c);
-  }
-  const CameraIntrinsics& camera() const override { return scene_->camera(); }
-  std::optional<RgbdFrame> next() override {
-    if (next_ == scene_->frameCount()) return std::nullopt;
-    if (next_ == fail_at_) throw InputError("frame " + std::to_string(next_) + ": unreadable");
-    return scene_->render(next_++).frame;
-  }
-  std::optional<size_t> remaining() const override { return scene_->frameCount() - next_; }
-  std::string name() const override { return "synth"; }
-
- private:
-  std::unique_ptr<synth::SyntheticScene> scene_;
-  int next_ = 0, fail_at_;
-};
+using testing::SynthSource;
 
 // Records the calls it gets; asks the run to stop after `stop_after` frames.
 struct ProbeSink : ResultSink {

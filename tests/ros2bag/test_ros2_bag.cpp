@@ -25,15 +25,7 @@ namespace fs = std::filesystem;
 namespace ff {
 namespace {
 
-template <class F>
-std::string inputErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using testing::inputErrorOf;
 
 #ifndef FLOWFUSION_HAVE_ROS2BAG
 
