@@ -18,6 +18,7 @@
 #include "flowfusion/io/tum_folder_source.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "testing/run_output.h"
 #include "testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -207,30 +208,9 @@ TEST(Ros2Bag, ARosbag2FolderReadsItsFilesInOrderAndConverts) {
   expectSameFrames(converted, dir, "converted folder");
 }
 
-// Poses and masks of a whole run.
-struct RunOutput : ResultSink {
-  std::vector<std::pair<double, SE3>> poses;
-  std::vector<cv::Mat> masks;
-  void frame(const RgbdFrame&, const FrameResult& r) override {
-    poses.emplace_back(r.timestamp, r.T_world_cam);
-    masks.push_back(r.dynamic_mask.clone());
-  }
-};
-
-RunOutput runOn(FrameSource& source) {
-  RunOutput out;
-  runSequence(source, SystemConfig{}, {&out});
-  return out;
-}
-
-void expectSameRun(const RunOutput& a, const RunOutput& b, const std::string& what) {
-  ASSERT_EQ(a.poses.size(), b.poses.size()) << what;
-  for (size_t i = 0; i < a.poses.size(); ++i) {
-    EXPECT_NEAR(a.poses[i].first, b.poses[i].first, 1e-9) << what;
-    EXPECT_LT((a.poses[i].second.matrix() - b.poses[i].second.matrix()).cwiseAbs().maxCoeff(), 1e-9) << what;
-    EXPECT_EQ(cv::norm(a.masks[i], b.masks[i], cv::NORM_INF), 0) << what << " frame " << i;
-  }
-}
+using testing::RunOutput;
+using testing::expectSameRun;
+using testing::runOn;
 
 TEST(Ros2Bag, RunsOnMcapAndDb3GiveTheFoldersTrajectoryAndMasks) {
   REQUIRE_MCAP_WRITER();
