@@ -311,6 +311,7 @@ TEST(DynamicScores, OnlyTheFlowStartsAGroupsMotionTheDepthKeepsARememberedOneMov
   r.r_D = (cv::Mat_<float>(1, 6) << 0.17f, 0.17f, 0.f, 0.f, 0.f, 0.f);
   r.r_F = cv::Mat(1, 6, CV_32F, cv::Scalar(0.f));
   r.r_M = (cv::Mat_<float>(1, 6) << 2.f, 2.f, 0.f, 0.f, 0.f, 0.f);
+  r.r_D_from_map = true;  // the target is a model keyframe
   ScoreConfig cfg;
   ASSERT_EQ(cfg.model_motion_cue, ModelMotionCue::kFlow);
   const DynamicScores s = computeDynamicScores(g, r, cfg);
@@ -325,9 +326,13 @@ TEST(DynamicScores, OnlyTheFlowStartsAGroupsMotionTheDepthKeepsARememberedOneMov
   r.r_D = cv::Mat();
   r.r_F.colRange(0, 2).setTo(cv::Scalar(static_cast<float>(1.1 * cfg.model_motion_delta / cfg.alpha_F)));
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
-  // Before: any term started it.
+  // Against a plain frame the depth residual is the frame's own evidence: any term starts it.
   r.r_D = r_D;
   r.r_F.setTo(cv::Scalar(0.f));
+  r.r_D_from_map = false;
+  EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
+  // Before: any term started it, whatever the target.
+  r.r_D_from_map = true;
   cfg.model_motion_cue = ModelMotionCue::kAnyTerm;
   EXPECT_GT(computeDynamicScores(g, r, cfg).b[0], 0.5f);
 }

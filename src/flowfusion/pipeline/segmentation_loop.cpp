@@ -169,12 +169,6 @@ SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationIn
   return e;
 }
 
-ScoreConfig SegmentationLoop::scoreConfigFor(const TrackingTarget& target) const {
-  ScoreConfig c = config_.scores;
-  if (!target.from_model) c.model_motion_cue = ModelMotionCue::kAnyTerm;
-  return c;
-}
-
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
                                    MotionEstimate& estimate, Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
@@ -182,6 +176,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   const RgbdFrame seg_frame = segmentationFrame(in.frame, in.cur);
   ResidualImages res;
   MapEvidence evidence = mapEvidence(in, in.target.T_world_target * estimate.T_target_cur, seg_frame, timings);
+  res.r_D_from_map = in.target.from_model;
   res.r_M = evidence.r_M;
   res.a_M = evidence.a_M;
   background_ = evidence.background;
@@ -210,7 +205,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_F = relativeToFrameError(
           flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur),
           config_.scores.flow_error_px);
-      scores = computeDynamicScores(graph, res, scoreConfigFor(in.target));
+      scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);
     }

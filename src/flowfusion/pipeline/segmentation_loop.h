@@ -84,7 +84,6 @@ class SegmentationLoop {
   };
   MapEvidence mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
                           Timings& timings) const;
-  ScoreConfig scoreConfigFor(const TrackingTarget& target) const;
   void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
                    MotionEstimate& estimate, Timings& timings);
   // The current frame's intensity and depth at the segmentation level.

@@ -262,7 +262,7 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   std::vector<char> minority(n);
   for (int c = 0; c < n; ++c) minority[c] = group_pixels[c] <= 0.5 * pixels;
   for (int c = 0; c < n; ++c) remembered[c] = remembered[c] && minority[c];
-  if (config.model_motion_cue == ModelMotionCue::kFlow)
+  if (config.model_motion_cue == ModelMotionCue::kFlow && residuals.r_D_from_map)
     for (int c = 0; c < n; ++c) moves[c] = flow_moves[c] || (moves[c] && remembered[c]);
   if (config.model_needs_motion && !residuals.r_M.empty()) {
     bool dropped = false;

@@ -54,7 +54,7 @@ struct ScoreConfig {
   // or flagged once) has a depth residual and a model occlusion term at once, each confirming the
   // other in every frame (real fr1/rpy): there the flow, an independent cue, starts a group's
   // motion and its memory, and the depth keeps a remembered group moving (a person who sat down
-  // stays dynamic). Against a plain frame the segmentation loop lets any term start it.
+  // stays dynamic). Against a plain frame (ResidualImages::r_D_from_map false) any term starts it.
   ModelMotionCue model_motion_cue = ModelMotionCue::kFlow;
   // Static evidence (our extension): a cluster agreeing with the stable map over a fraction a of
   // its pixels has its motion delta scaled by (1 - model_agreement * a) (docs/tuning.md#agreement).
@@ -104,6 +104,7 @@ void validate(const ScoreConfig& config);
 struct ResidualImages {
   cv::Mat r_I;  // |intensity residual|, [0, 1] units
   cv::Mat r_D;  // |depth residual|, metres
+  bool r_D_from_map = false;  // r_D compared with a target built from the map (ScoreConfig::model_motion_cue)
   cv::Mat r_F;  // flow residual, pixels
   cv::Mat r_M;  // occlusion of the static model, metres (modelOcclusion)
   cv::Mat a_M;  // agreement with the static model, 1 or 0 (modelAgreement)
@@ -118,8 +119,9 @@ struct DynamicScores {
                              // the cluster had no valid residual
   std::vector<float> b;      // dynamic score in [0, 1] per cluster
   std::vector<char> moving;  // per cluster: b > 0.5 in a group with motion evidence of this frame
-                             // (delta above model_motion_delta; the memory does not count) and a
-                             // carried prior above 0.5 (dynamic in the previous frame too)
+                             // (delta above model_motion_delta, as model_motion_cue allows it; the
+                             // memory alone does not count) and a carried prior above 0.5
+                             // (dynamic in the previous frame too)
 };
 
 // g (Eq. 13) and w (Eq. 14).
