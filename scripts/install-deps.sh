@@ -20,3 +20,6 @@ $SUDO apt-get install -y -qq --no-install-recommends librosbag-storage-dev libse
 # recordings are written by the MCAP project's npm packages, which the build installs with `npm ci`
 # from tests/fixtures/ros2bag/package-lock.json (Node 20 and npm; the tests skip without them).
 $SUDO apt-get install -y -qq --no-install-recommends libzstd-dev liblz4-dev libsqlite3-dev
+# Loop closure (the keyframe pose graph): Ceres; without it flowfusion builds and runs with loop
+# closure off, saying so.
+$SUDO apt-get install -y -qq --no-install-recommends libceres-dev

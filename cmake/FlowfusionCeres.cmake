@@ -1,0 +1,20 @@
+# Loop closure's pose graph (src/flowfusion/slam/pose_graph.cpp) with Debian's libceres-dev. Without
+# it the build still works and loop closure is off, saying so at the start of a run. Sets
+# FLOWFUSION_CERES_FOUND, _LIBRARIES and _DEFINES (FLOWFUSION_HAVE_CERES).
+option(FLOWFUSION_WITH_CERES "Close loops (pose graph) when libceres-dev is installed" ON)
+set(FLOWFUSION_CERES_FOUND OFF)
+set(FLOWFUSION_CERES_LIBRARIES)
+set(FLOWFUSION_CERES_DEFINES)
+if(FLOWFUSION_WITH_CERES)
+  find_package(Ceres QUIET)
+  if(Ceres_FOUND)
+    set(FLOWFUSION_CERES_FOUND ON)
+    set(FLOWFUSION_CERES_LIBRARIES Ceres::ceres)
+    set(FLOWFUSION_CERES_DEFINES FLOWFUSION_HAVE_CERES)
+  endif()
+endif()
+if(FLOWFUSION_CERES_FOUND)
+  message(STATUS "flowfusion: loop closure enabled (Ceres ${Ceres_VERSION})")
+else()
+  message(STATUS "flowfusion: loop closure disabled (install libceres-dev to enable it)")
+endif()

@@ -1,0 +1,193 @@
+#include "flowfusion/slam/loop_closer.h"
+
+#include <deque>
+#include <future>
+#include <spdlog/spdlog.h>
+
+#include "flowfusion/slam/keyframe.h"
+#include "flowfusion/slam/loop_verifier.h"
+#include "flowfusion/slam/place_index.h"
+#include "flowfusion/slam/pose_graph.h"
+
+namespace ff {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// What one keyframe's check found: the corrected poses of keyframes 0..K when it closed a loop.
+struct CheckResult {
+  int loops = 0;
+  std::vector<SE3> poses;
+};
+
+// Randomized ferns propose, the dense odometry verifies, a Ceres pose graph corrects.
+class FernLoopCloser final : public SlamBackEnd {
+ public:
+  FernLoopCloser(const SlamConfig& config, const OdometryConfig& odometry, const CameraIntrinsics& camera)
+      : config_(config),
+        odometry_(odometry),
+        camera_(camera),
+        index_(config.fern_count,
+               cv::Size(config.fern_image_width, std::max(1, config.fern_image_width * camera.height / camera.width)),
+               odometry.min_depth, std::min(odometry.max_depth, 5.0)) {}
+  ~FernLoopCloser() override { finish(); }
+
+  void frameTracked(const TrackedFrameInfo& info) override;
+  std::optional<MapCorrection> takeCorrection() override;
+  void finish() override {
+    for (Pending& p : pending_) {
+      p.due_frame = frame_index_;
+      p.result.wait();
+    }
+  }
+  Trajectory trajectory() const override;
+  int loopClosures() const override { return closures_; }
+  int keyframes() const override { return static_cast<int>(poses_.size()); }
+
+ private:
+  struct FrameRef {
+    double timestamp;
+    int keyframe;   // -1: before the first keyframe
+    SE3 T_kf_cam;   // the reported pose relative to it (or the pose itself)
+    SE3 T_world_cam;  // the reported pose: the trajectory, exactly, until a loop closes
+  };
+  struct Pending {
+    int due_frame;
+    std::shared_future<CheckResult> result;
+  };
+
+  bool needsKeyframe(const SE3& T_world_cam) const;
+  void addKeyframe(const TrackedFrameInfo& info);
+  // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
+  CheckResult check(int id, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses);
+  MapCorrection apply(const CheckResult& r);
+
+  const SlamConfig config_;
+  const OdometryConfig odometry_;
+  const CameraIntrinsics camera_;
+  // The tracking thread's: keyframe poses in the tracker's world frame, frames, map anchors.
+  std::vector<SE3> poses_;
+  std::vector<FrameRef> frames_;
+  std::vector<int> anchors_;  // keyframe per map integration
+  int frame_index_ = 0;
+  int closures_ = 0;
+  // The background checks' (one at a time, in keyframe order): index, images and graph edges.
+  FernIndex index_;
+  std::vector<std::shared_ptr<const KeyframeImages>> images_;
+  std::vector<PoseGraphEdge> edges_;
+  // Last: the checks still running end before the members they use go.
+  std::deque<Pending> pending_;
+};
+
+bool FernLoopCloser::needsKeyframe(const SE3& T_world_cam) const {
+  if (poses_.empty()) return true;
+  const SE3 moved = poses_.back().inverse() * T_world_cam;
+  return translationNorm(moved) > config_.keyframe_translation_m ||
+         rotationAngleDeg(moved) > config_.keyframe_rotation_deg;
+}
+
+void FernLoopCloser::frameTracked(const TrackedFrameInfo& info) {
+  ++frame_index_;
+  if (info.tracking_ok && needsKeyframe(info.T_world_cam)) addKeyframe(info);
+  const int ref = static_cast<int>(poses_.size()) - 1;
+  frames_.push_back({info.frame->timestamp, ref,
+                     ref < 0 ? info.T_world_cam_reported : poses_[ref].inverse() * info.T_world_cam_reported,
+                     info.T_world_cam_reported});
+  if (info.fused) anchors_.push_back(ref);
+}
+
+void FernLoopCloser::addKeyframe(const TrackedFrameInfo& info) {
+  const int id = static_cast<int>(poses_.size());
+  poses_.push_back(info.T_world_cam);
+  auto images = makeKeyframeImages(*info.frame, camera_, info.scores, config_);
+  std::shared_future<CheckResult> previous = pending_.empty() ? std::shared_future<CheckResult>() : pending_.back().result;
+  std::shared_future<CheckResult> result =
+      std::async(std::launch::async, [this, id, images = std::move(images), poses = poses_, previous]() mutable {
+        if (previous.valid()) previous.wait();
+        return check(id, std::move(images), std::move(poses));
+      }).share();
+  pending_.push_back({frame_index_ + config_.apply_after_frames, std::move(result)});
+}
+
+CheckResult FernLoopCloser::check(int id, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses) {
+  // The odometry edge as the tracker measured it, in the poses known when the keyframe was made.
+  if (id > 0)
+    edges_.push_back({id - 1, id, poses[id - 1].inverse() * poses[id], config_.odometry_sigma_m,
+                      config_.odometry_sigma_deg * kDeg, false});
+  std::vector<uint8_t> codes = index_.encode(*images);
+  const std::vector<PlaceMatch> matches =
+      index_.query(codes, id - config_.min_keyframe_gap, config_.candidates, config_.min_similarity);
+  index_.add(id, std::move(codes));
+  images_.push_back(images);
+  CheckResult result;
+  for (const PlaceMatch& m : matches) {
+    const SE3 guess = poses[m.keyframe_id].inverse() * poses[id];
+    const LoopCheck c = verifyLoop(*images, *images_[m.keyframe_id], guess, odometry_, config_);
+    spdlog::debug("loop {} -> {}: similarity {:.2f}, {} (inliers {:.2f})", id, m.keyframe_id, m.similarity,
+                  c.accepted ? "accepted" : c.reason, c.inlier_fraction);
+    if (!c.accepted) continue;
+    edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg, true});
+    ++result.loops;
+  }
+  if (result.loops > 0) {
+    PoseGraphOptions options;
+    options.robust_scale = config_.loop_loss_scale;
+    result.poses = optimizePoseGraph(poses, edges_, options);
+  }
+  return result;
+}
+
+std::optional<MapCorrection> FernLoopCloser::takeCorrection() {
+  while (!pending_.empty() && pending_.front().due_frame <= frame_index_) {
+    const CheckResult r = pending_.front().result.get();
+    pending_.pop_front();
+    if (r.loops > 0) return apply(r);
+  }
+  return std::nullopt;
+}
+
+MapCorrection FernLoopCloser::apply(const CheckResult& r) {
+  // Keyframes the check knew take its poses; later ones move with the last of those.
+  const size_t known = r.poses.size();
+  std::vector<SE3> T_new_old(poses_.size());
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    T_new_old[i] = i < known ? orthonormalized(r.poses[i] * poses_[i].inverse()) : T_new_old[known - 1];
+    poses_[i] = orthonormalized(T_new_old[i] * poses_[i]);
+  }
+  MapCorrection c;
+  c.T_new_old_current = T_new_old.back();
+  c.T_new_old_by_integration.reserve(anchors_.size());
+  for (int a : anchors_) c.T_new_old_by_integration.push_back(a < 0 ? SE3::Identity() : T_new_old[a]);
+  c.loops = r.loops;
+  closures_ += r.loops;
+  return c;
+}
+
+Trajectory FernLoopCloser::trajectory() const {
+  Trajectory out;
+  out.reserve(frames_.size());
+  for (const FrameRef& f : frames_)
+    out.push_back({f.timestamp, closures_ == 0 || f.keyframe < 0 ? f.T_world_cam
+                                                                 : orthonormalized(poses_[f.keyframe] * f.T_kf_cam)});
+  return out;
+}
+
+}  // namespace
+
+std::unique_ptr<SlamBackEnd> makeSlamBackEnd(const SlamConfig& config, const OdometryConfig& odometry,
+                                             const CameraIntrinsics& camera, std::string* note) {
+  switch (config.loop_closure) {
+    case LoopClosureMode::Off:
+      return nullptr;
+    case LoopClosureMode::Ferns:
+      if (!loopClosureAvailable()) {
+        if (note) *note = "loop closure off: this build has no Ceres (install libceres-dev, scripts/install-deps.sh, and rebuild)";
+        return nullptr;
+      }
+      return std::make_unique<FernLoopCloser>(config, odometry, camera);
+  }
+  return nullptr;
+}
+
+}  // namespace ff

@@ -1,0 +1,63 @@
+#pragma once
+// The back end that turns odometry into SLAM: keyframes as the camera moves, loops found among
+// them (place index, geometric check) and the keyframe pose graph solved with Ceres, all on a
+// background thread; the tracking thread hands over each frame and takes the corrections.
+//
+// Reproducible whatever the thread timing: a keyframe's check starts from what the tracking
+// thread knew when the keyframe was made, and its result is applied slam.apply_after_frames frames
+// later (the tracking thread waits there only if the check is still running). A correction moves
+// every keyframe; frames keep their pose relative to the keyframe that was the latest when they
+// were tracked, and the map's surfels move with the keyframe that was the latest when they were
+// created (their map integration's anchor).
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/odometry/dense_odometry.h"
+#include "flowfusion/slam/slam_config.h"
+
+namespace ff {
+
+// What the tracking thread hands over after each frame.
+struct TrackedFrameInfo {
+  const RgbdFrame* frame = nullptr;
+  SE3 T_world_cam;           // the tracked pose (the depth image's time): keyframes take it
+  SE3 T_world_cam_reported;  // the pose the trajectory reports (the colour image's time)
+  bool tracking_ok = true;
+  cv::Mat scores;            // b per pixel at any level, empty for all static
+  bool fused = false;        // the frame was integrated into the map (its surfels anchor here)
+};
+
+// A loop closure's effect on what the tracking thread holds, T_new_old: old world -> corrected.
+struct MapCorrection {
+  SE3 T_new_old_current;                      // the tracker's frame (the latest keyframe's correction)
+  std::vector<SE3> T_new_old_by_integration;  // the map's surfels, by the integration that created them
+  int loops = 0;                              // loop edges this correction added
+};
+
+class SlamBackEnd {
+ public:
+  virtual ~SlamBackEnd() = default;
+  virtual void frameTracked(const TrackedFrameInfo& info) = 0;
+  // The next correction due before the next frame, if any (waits for its check when it still
+  // runs); call until it returns none.
+  virtual std::optional<MapCorrection> takeCorrection() = 0;
+  // Makes every check still running due, so takeCorrection() returns the rest (the run's end).
+  virtual void finish() = 0;
+  // The trajectory after the last applied correction: each frame's reported pose moved with its
+  // keyframe (as tracked until a loop closes).
+  virtual Trajectory trajectory() const = 0;
+  virtual int loopClosures() const = 0;  // loop edges applied
+  virtual int keyframes() const = 0;
+};
+
+// The back end slam.loop_closure names; null for off, and for ferns in a build without Ceres
+// (then `note`, when given, says so and how to enable it).
+std::unique_ptr<SlamBackEnd> makeSlamBackEnd(const SlamConfig& config, const OdometryConfig& odometry,
+                                             const CameraIntrinsics& camera, std::string* note = nullptr);
+
+}  // namespace ff

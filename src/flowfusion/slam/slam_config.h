@@ -1,0 +1,70 @@
+#pragma once
+// The `slam` section: loop closure over keyframes (slam/loop_closer.h). Keyframes are kept as the
+// camera moves, a place index of randomized ferns proposes old keyframes that look like a new one,
+// the dense odometry checks each proposal geometrically, and a pose graph over the keyframes
+// (odometry and loop edges, a robust loss on the loops) is solved with Ceres on a background
+// thread. docs/tuning.md#loop_closure holds the measurements behind the defaults.
+#include <nlohmann/json.hpp>
+
+#include "flowfusion/core/config_enum.h"
+
+namespace ff {
+
+enum class LoopClosureMode {
+  Off,    // odometry only: drift is never corrected
+  Ferns,  // randomized ferns propose, the dense odometry verifies, a Ceres pose graph corrects
+};
+FLOWFUSION_CONFIG_ENUM(LoopClosureMode, "slam.loop_closure", {LoopClosureMode::Off, "off"},
+                       {LoopClosureMode::Ferns, "ferns"})
+
+struct SlamConfig {
+  // Without Ceres (libceres-dev) at build time, ferns is taken as off and a run says so.
+  LoopClosureMode loop_closure = LoopClosureMode::Ferns;
+  // A new keyframe once the camera moved this far from the last one (metres, degrees).
+  double keyframe_translation_m = 0.2;
+  double keyframe_rotation_deg = 15.0;
+  // Pyramid level of the input a keyframe keeps (1: 320x240 for VGA, about 300 kB a keyframe).
+  int keyframe_level = 1;
+  // Place index: ferns, each one pixel of an 80x60 image tested against four random thresholds
+  // (blue, green, red, depth), compared only where both images are static and have depth.
+  int fern_count = 500;
+  int fern_image_width = 80;  // px; the height follows the camera's aspect ratio
+  // A keyframe is a candidate when at least this share of the ferns valid in both agree.
+  double min_similarity = 0.4;
+  int candidates = 3;          // best candidates checked per new keyframe
+  int min_keyframe_gap = 8;    // a candidate is at least this many keyframes older
+  // Geometric check: the odometry of the new keyframe against the candidate converged, and this
+  // share of its static pixels with depth land on the candidate within the inlier bounds.
+  double min_inlier_fraction = 0.55;
+  double inlier_depth_m = 0.02;  // * max(1, depth in metres)
+  double inlier_intensity = 0.08;  // [0, 1] grey
+  // The loop found may not move the new keyframe from where the graph has it by more than this.
+  double max_correction_m = 0.5;
+  double max_correction_deg = 20.0;
+  // Pose graph: standard deviations of an odometry edge (between consecutive keyframes) and of a
+  // loop edge; loop edges go through a Cauchy loss of this scale (in standard deviations).
+  double odometry_sigma_m = 0.01;
+  double odometry_sigma_deg = 0.5;
+  double loop_sigma_m = 0.01;
+  double loop_sigma_deg = 0.5;
+  double loop_loss_scale = 2.0;
+  // A keyframe's loop check runs on a background thread; its result is applied this many frames
+  // later (the tracking thread waits there only if the check is still running), which keeps runs
+  // reproducible whatever the thread timing.
+  int apply_after_frames = 10;
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlamConfig, loop_closure, keyframe_translation_m,
+                                                keyframe_rotation_deg, keyframe_level, fern_count, fern_image_width,
+                                                min_similarity, candidates, min_keyframe_gap, min_inlier_fraction,
+                                                inlier_depth_m, inlier_intensity, max_correction_m,
+                                                max_correction_deg, odometry_sigma_m, odometry_sigma_deg,
+                                                loop_sigma_m, loop_sigma_deg, loop_loss_scale, apply_after_frames)
+
+// Throws InputError naming the setting when a value is out of range. `odometry_levels` bounds
+// keyframe_level.
+void validate(const SlamConfig& config, int odometry_levels);
+
+// Whether this build can close loops (it found Ceres).
+bool loopClosureAvailable();
+
+}  // namespace ff
