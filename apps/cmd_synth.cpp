@@ -25,7 +25,9 @@ constexpr int kMaxSynthFrames = 100000;
 
 // Bounds the library's validation leaves open: the frame count, and timestamps that stay below
 // what the sequence readers accept.
-void checkSynthRange(const ff::synth::SynthConfig& c) {
+void checkSynthRange(const ff::synth::SynthConfig& config) {
+  ff::synth::SynthConfig c = config;
+  c.frames = ff::synth::frameCount(config);
   if (c.frames > kMaxSynthFrames)
     throw ff::InputError("--frames: at most " + std::to_string(kMaxSynthFrames) +
                          " frames (about 55 minutes at 30 Hz), got " + std::to_string(c.frames));
@@ -82,6 +84,15 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
                                               {"handheld", ff::synth::CameraMotion::Handheld},
                                               {"rpy", ff::synth::CameraMotion::Rpy}},
                                           CLI::ignore_case));
+  cmd->add_option("--camera-path", o->config.camera_path,
+                  "sweep (hand-held about the room's centre) or loop (round a 0.6 m circle looking outwards, "
+                  "at --camera-speed; for loop closure)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, ff::synth::CameraPathKind>{
+                                              {"sweep", ff::synth::CameraPathKind::Sweep},
+                                              {"loop", ff::synth::CameraPathKind::Loop}},
+                                          CLI::ignore_case));
+  cmd->add_option("--laps", o->config.laps, "With --camera-path loop: this many laps (sets --frames; 0: --frames)")
+      ->capture_default_str();
   cmd->add_option("--exposure-ms", o->config.exposure_ms,
                   "Motion blur: exposure time in ms over which camera and objects move (0: off)")
       ->capture_default_str();

@@ -138,18 +138,21 @@ SE3 CameraPath::T_world_cam(double t) const {
     // Camera looking along world +x with zero angles: cam z = world x, cam x = -world y, cam y = -world z.
     Eigen::Matrix3d R0;
     R0 << 0, 0, 1, -1, 0, 0, 0, -1, 0;
-    const double y = yaw0 + yaw.value(t), p = pitch0 + pitch.value(t), r = roll.value(t);
+    const double round = loop_rate * t;  // rad round the loop
+    const double y = yaw0 + round + yaw.value(t), p = pitch0 + pitch.value(t), r = roll.value(t);
     SE3 T = SE3::Identity();
     T.linear() = (Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(-p, Eigen::Vector3d::UnitY()))
                      .toRotationMatrix() *
                  R0 * Eigen::AngleAxisd(r, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    T.translation() = centre + Eigen::Vector3d(position[0].value(t), position[1].value(t), position[2].value(t));
+    T.translation() = centre + Eigen::Vector3d(position[0].value(t), position[1].value(t), position[2].value(t)) +
+                      loop_radius_m * Eigen::Vector3d(std::cos(yaw0 + round), std::sin(yaw0 + round), 0);
     return T;
   }
 nlohmann::json CameraPath::describe() const {
   return {{"centre_m", jsonVec(centre)}, {"yaw0_rad", yaw0}, {"pitch0_rad", pitch0},
           {"x_m", position[0].describe()}, {"y_m", position[1].describe()}, {"z_m", position[2].describe()},
-          {"yaw_rad", yaw.describe()}, {"pitch_rad", pitch.describe()}, {"roll_rad", roll.describe()}};
+          {"yaw_rad", yaw.describe()}, {"pitch_rad", pitch.describe()}, {"roll_rad", roll.describe()},
+          {"loop_radius_m", loop_radius_m}, {"loop_rate_rad_per_s", loop_rate}};
 }
 
 SE3 CameraRelativePath::T_world_object(double t) const {

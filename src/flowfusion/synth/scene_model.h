@@ -110,10 +110,13 @@ struct RenderedLayer {
 };
 
 // Hand-held camera: position and yaw/pitch/roll are sums of a few sinusoids around a centre; time
-// is scaled so that the RMS speeds match the configuration.
+// is scaled so that the RMS speeds match the configuration. A loop (loop_rate != 0) also carries
+// the centre round a circle of loop_radius_m, the camera looking outwards from it.
 struct CameraPath {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double yaw0 = 0, pitch0 = 0;
+  double loop_radius_m = 0;
+  double loop_rate = 0;  // rad/s round the circle (0: no loop)
   std::array<Sinusoids, 3> position;  // x, y, z offsets, m
   Sinusoids yaw, pitch, roll;         // rad
 

@@ -22,7 +22,7 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr uint64_t kRoomStream = 0x524f4f4dULL, kObjectStream = 0x4f424a53ULL, kNoiseStream = 0x4e4f4953ULL;
 // Streams of the hard-case options, one each, so that none of them changes the others' draws.
 constexpr uint64_t kRpyStream = 0x52505953ULL, kSeatStream = 0x53454154ULL, kPeopleStream = 0x50504c45ULL,
-                   kNearStream = 0x4e454152ULL, kPushedStream = 0x50555348ULL;
+                   kNearStream = 0x4e454152ULL, kPushedStream = 0x50555348ULL, kLoopStream = 0x4c4f4f50ULL;
 
 // Objects move back and forth on an arc around the room centre (so they cross the camera's view),
 // with a slow radial wobble. People face where they walk and turn round smoothly at the ends.
@@ -184,6 +184,8 @@ void scaleAngularSpeed(CameraPath& cam, double deg_per_s) {
   cam.roll.scaleTime(k_r);
 }
 
+void addCentreFurniture(SceneModel& m, Rng& rng, const CameraPath& cam, const Palette& pal);
+
 // The room, its furniture, the light and the camera path: everything of the static twin.
 CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
   Room room;
@@ -233,7 +235,15 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
   scaleAngularSpeed(cam, cfg.camera_angular_speed);
 
   // Free-standing furniture between the camera and the objects' paths, near the initial view
-  // direction, so that objects are also occluded.
+  // direction, so that objects are also occluded (not on a loop, which passes where it stands).
+  if (cfg.camera_path == CameraPathKind::Sweep) addCentreFurniture(m, rng, cam, pal);
+  m.light.position = Eigen::Vector3d(room.size.x() / 2 + rng.uniform(-1, 1), room.size.y() / 2 + rng.uniform(-1, 1),
+                                     room.size.z() - 0.4);
+  return cam;
+}
+
+void addCentreFurniture(SceneModel& m, Rng& rng, const CameraPath& cam, const Palette& pal) {
+  const Eigen::Vector3d room_size = m.room->size;
   const Eigen::Vector2d c2(cam.centre.x(), cam.centre.y());
   {
     const double a = cam.yaw0 + rng.uniform(-0.6, -0.2), r = rng.uniform(1.05, 1.15);
@@ -242,7 +252,7 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
     Item it;
     it.kind = "coffee_table";
     // Axis-aligned; its half-diagonal (< 0.6 m) keeps it clear of the camera's excursions.
-    const WallFrame world{2, room.size};  // s = x, n = y
+    const WallFrame world{2, room_size};  // s = x, n = y
     addTable(it, [&](double s0, double s1, double n0, double n1, double z0, double z1, int tex, float al) {
                return world.part(s0, s1, n0, n1, z0, z1, tex, rng, al);
              },
@@ -263,10 +273,6 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
                pal.fabric, rng, 1.3f));
     m.furniture.push_back(it);
   }
-
-  m.light.position = Eigen::Vector3d(room.size.x() / 2 + rng.uniform(-1, 1), room.size.y() / 2 + rng.uniform(-1, 1),
-                                     room.size.z() - 0.4);
-  return cam;
 }
 
 void addObjects(SceneModel& m, Rng& rng, const SynthConfig& cfg, const CameraPath& cam) {
@@ -303,6 +309,20 @@ void makeRpy(CameraPath& cam, const SynthConfig& cfg) {
   cam.pitch = randomSinusoids(rng, {{14 * kDeg, 0.35}, {5 * kDeg, 0.8}});
   cam.roll = randomSinusoids(rng, {{14 * kDeg, 0.4}, {5 * kDeg, 0.9}});
   scaleAngularSpeed(cam, cfg.camera_angular_speed);
+}
+
+// Round the room's centre at the configured speed, looking outwards, with a small hand-held wobble
+// of position (a few cm) and angles (a few degrees) that is not scaled with the speed.
+void makeLoop(CameraPath& cam, const SynthConfig& cfg) {
+  Rng rng(hashCombine(cfg.seed, kLoopStream));
+  cam.loop_radius_m = kLoopRadiusM;
+  cam.loop_rate = cfg.camera_speed / kLoopRadiusM;
+  cam.position[0] = randomSinusoids(rng, {{0.03, 0.2}, {0.01, 0.5}});
+  cam.position[1] = randomSinusoids(rng, {{0.03, 0.2}, {0.01, 0.5}});
+  cam.position[2] = randomSinusoids(rng, {{0.03, 0.15}});
+  cam.yaw = randomSinusoids(rng, {{5 * kDeg, 0.15}, {1.5 * kDeg, 0.4}});
+  cam.pitch = randomSinusoids(rng, {{3 * kDeg, 0.2}});
+  cam.roll = randomSinusoids(rng, {{2 * kDeg, 0.25}});
 }
 
 // The first camera's view as seen on the floor: where people walk, seats and pushed objects stand.
@@ -435,19 +455,32 @@ void validate(const SynthConfig& c) {
     bad("pushed_objects must be in 0..4, got " + std::to_string(c.pushed_objects));
   if (!(c.rest_s >= 0 && c.rest_s <= 600)) bad("rest_s must be in [0, 600] s");
   if (!(c.exposure_ms >= 0 && c.exposure_ms <= 200)) bad("exposure_ms must be in [0, 200] ms");
+  if (c.laps < 0 || c.laps > 100) bad("laps must be in 0..100, got " + std::to_string(c.laps));
+  if (c.laps > 0 && c.camera_path != CameraPathKind::Loop) bad("laps needs camera_path loop");
+  if (c.camera_path == CameraPathKind::Loop && c.camera_motion != CameraMotion::Handheld)
+    bad("camera_path loop takes camera_motion handheld");
+  if (c.camera_path == CameraPathKind::Loop && !(c.camera_speed > 0)) bad("camera_path loop needs camera_speed > 0");
   if (c.exposure_samples < 2 || c.exposure_samples > 64)
     bad("exposure_samples must be in 2..64, got " + std::to_string(c.exposure_samples));
 }
 
 }  // namespace
 
+int frameCount(const SynthConfig& c) {
+  if (c.laps <= 0 || !(c.camera_speed > 0)) return c.frames;
+  const double frames = std::round(c.laps * 2 * M_PI * kLoopRadiusM / c.camera_speed * c.fps);
+  return frames < 1e9 ? static_cast<int>(frames) : 1000000000;
+}
+
 SyntheticScene::SyntheticScene(const SynthConfig& config)
     : config_(config), camera_(), model_(std::make_unique<SceneModel>()) {
   validate(config_);
+  config_.frames = synth::frameCount(config_);
   camera_ = scaledFr1(config_.width, config_.height);
   Rng room_rng(hashCombine(config_.seed, kRoomStream));
   CameraPath cam = buildRoom(*model_, room_rng, config_);
   if (config_.camera_motion == CameraMotion::Rpy) makeRpy(cam, config_);
+  if (config_.camera_path == CameraPathKind::Loop) makeLoop(cam, config_);
   Rng object_rng(hashCombine(config_.seed, kObjectStream));
   addObjects(*model_, object_rng, config_, cam);
   const WalkLine view = firstView(cam);

@@ -38,6 +38,12 @@ inline constexpr int kGeneratorVersion = 1;
 enum class CameraMotion { Handheld, Rpy };
 NLOHMANN_JSON_SERIALIZE_ENUM(CameraMotion, {{CameraMotion::Handheld, "handheld"}, {CameraMotion::Rpy, "rpy"}})
 
+// Where the camera goes: the hand-held sweep about the room's centre, or a loop round a circle of
+// kLoopRadiusM about it, looking outwards (to see the same places again: loop closure).
+enum class CameraPathKind { Sweep, Loop };
+NLOHMANN_JSON_SERIALIZE_ENUM(CameraPathKind, {{CameraPathKind::Sweep, "sweep"}, {CameraPathKind::Loop, "loop"}})
+inline constexpr double kLoopRadiusM = 0.6;
+
 struct SynthConfig {
   uint64_t seed = 1;        // selects room, trajectory, objects and noise
   int frames = 300;         // number of frames
@@ -61,13 +67,21 @@ struct SynthConfig {
   int pushed_objects = 0;   // chairs and boxes in view that rest, are pushed, rest, are pushed back
   double rest_s = 3.0;      // s, how long pushed objects rest before each push
   CameraMotion camera_motion = CameraMotion::Handheld;
+  // loop: round the room's centre at camera_speed with a hand-held wobble; the free-standing
+  // furniture near the centre is left out (the camera would pass through it).
+  CameraPathKind camera_path = CameraPathKind::Sweep;
+  int laps = 0;  // with camera_path loop: > 0 sets frames to this many laps (0: frames decides)
   double exposure_ms = 0;   // ms, motion blur: colour averaged over this exposure centred on the timestamp (0: off)
   int exposure_samples = 8; // sub-frame renders averaged when exposure_ms > 0
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, frames, objects, width, height, fps, start_time,
                                                 camera_speed, camera_angular_speed, object_speed, noise, min_depth,
                                                 max_depth, color_noise, people, seats, near_objects, pushed_objects,
-                                                rest_s, camera_motion, exposure_ms, exposure_samples)
+                                                rest_s, camera_motion, camera_path, laps, exposure_ms,
+                                                exposure_samples)
+
+// The frames a configuration renders: `frames`, or `laps` laps of a loop at camera_speed and fps.
+int frameCount(const SynthConfig& config);
 
 struct SynthFrame {
   RgbdFrame frame;        // colour, intensity, depth (metres, noisy and quantised to 1/5000 m unless noise = false)
