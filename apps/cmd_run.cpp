@@ -19,6 +19,7 @@
 #include "flowfusion/pipeline/files_sink.h"
 #include "flowfusion/pipeline/mcap_sink.h"
 #include "flowfusion/pipeline/run.h"
+#include "flowfusion/pipeline/tracked_trajectory_sink.h"
 #include "flowfusion/report/report_sink.h"
 #include "flowfusion/report/viewer_sink.h"
 #include "sequence_options.h"
@@ -78,8 +79,8 @@ void checkRate(double rate) {
 }
 
 void printSummary(const RunSummary& s, const FrameSource& source) {
-  std::printf("frames %zu, tracking failures %d, flow restarts %d, median ms per frame:", s.frames,
-              s.tracking_failures, s.flow_restarts);
+  std::printf("frames %zu, tracking failures %d, flow restarts %d, loop closures %d (%d keyframes), median ms per frame:",
+              s.frames, s.tracking_failures, s.flow_restarts, s.loop_closures, s.slam_keyframes);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
   std::printf(" (frame %.1f ms wall, overlapping stages counted once)\n", s.frame_ms_median);
   if (source.groundtruth()) {
@@ -116,7 +117,8 @@ void execute(const RunCommand& c) {
   if (c.realtime) replay.emplace(*recording, c.rate);
   FrameSource& source = replay ? static_cast<FrameSource&>(*replay) : *recording;
   ProgressSink progress;
-  std::vector<ResultSink*> sinks = {&sink};
+  TrackedTrajectorySink tracked(c.out);
+  std::vector<ResultSink*> sinks = {&sink, &tracked};
   if (!c.quiet && isatty(fileno(stderr))) sinks.push_back(&progress);
   report::ViewerSink viewer;
   if (c.show) sinks.push_back(&viewer);

@@ -15,6 +15,7 @@
 #include "flowfusion/core/undistortion.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/pipeline/tracked_trajectory_sink.h"
 #include "sequence.h"
 
 namespace ff::py_bind {
@@ -72,6 +73,7 @@ class PySystem {
         sequence ? std::filesystem::absolute(sequence->sequence().dir()).lexically_normal().string() : "python";
     setOutputCommand("run");
     const OutputRelease release;
+    TrackedTrajectorySink tracked(out_dir);
     sink.begin({name, nullptr, system_.config(), system_.camera(), frames_});
     for (const auto& kept : masks_) {
       RgbdFrame frame;
@@ -82,8 +84,10 @@ class PySystem {
                                                   : sequence->source().toRawPixels(kept.mask);
       sink.frame(frame, result);
     }
+    system_.finishLoopClosure();  // the loop checks still running, as at the end of a run
     RunSummary s = summary();
     sink.end(s, system_);
+    tracked.end(s, system_);
     return s.written;
   }
 
@@ -102,7 +106,12 @@ class PySystem {
     RunSummary s;
     s.frames = frames_;
     s.mean_rounds = frames_ ? static_cast<double>(rounds_) / static_cast<double>(frames_) : 0.0;
-    s.trajectory = system_.trajectory();
+    s.trajectory = system_.closedTrajectory();
+    s.tracked_trajectory = system_.trajectory();
+    s.loop_closure = system_.loopClosureActive();
+    s.loop_closures = system_.loopClosures();
+    s.slam_keyframes = system_.slamKeyframes();
+    if (!system_.loopClosureNote().empty()) s.notes.push_back(system_.loopClosureNote());
     s.tracking_failures = system_.trackingFailures();
     s.flow_restarts = system_.flowRestarts();
     s.timings = system_.timings();

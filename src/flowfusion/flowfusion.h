@@ -20,4 +20,5 @@
 #include "flowfusion/pipeline/result_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/pipeline/system_config.h"
+#include "flowfusion/pipeline/tracked_trajectory_sink.h"
 #include "flowfusion/synth/synthetic_scene.h"

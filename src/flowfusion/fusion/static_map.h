@@ -140,6 +140,11 @@ class StaticMap {
   // (CV_32FC1 in [0, 1], 0 = none).
   cv::Mat predictStableDepth(const SE3& T_world_cam, const CameraIntrinsics& camera, cv::Mat* intensity = nullptr) const;
 
+  // Moves each surfel (position and normal) by T_new_old_by_integration[its creating integration,
+  // Surfel::created]: a loop closure's correction of the keyframe each was fused near. Surfels of
+  // later integrations than the list holds stay. One pass over the surfels (static_map_correction.cpp).
+  void moveSurfels(const std::vector<SE3>& T_new_old_by_integration);
+
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }
   int framesIntegrated() const { return frame_index_; }

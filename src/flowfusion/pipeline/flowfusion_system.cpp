@@ -33,6 +33,7 @@ FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntri
       frames_since_fusion_(config_.pipeline.fusion_every) {
   if (config_.pipeline.segmentation) segmentation_ = std::make_unique<SegmentationLoop>(config_, camera_);
   if (config_.pipeline.fusion) map_ = std::make_unique<StaticMap>(config_.fusion);
+  slam_ = makeSlamBackEnd(config_.slam, config_.odometry, camera_, &slam_note_);
 }
 
 OdometryFrame FlowFusionSystem::prepare(const RgbdFrame& frame) {
@@ -67,6 +68,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   FrameResult result;
   result.timestamp = frame.timestamp;
   timings_.beginFrame(frame.timestamp);
+  applyLoopCorrections();
   OdometryFrame cur = prepare(frame);
   cv::Mat scores;  // b per pixel at the segmentation level
   if (!targets_.previous()) {
@@ -81,13 +83,17 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, config_.pipeline.mask_threshold);
   result.scores = scores;
-  startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
+  const bool fused = startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
   // A new model keyframe is the map rendered at this frame's pose, this frame's fusion included.
   if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok, !scores.empty())) finishFusion();
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);
   trajectory_.push_back({frame.timestamp, atColourTime(frame, result.T_world_cam)});
+  if (slam_) {
+    StageTimer timer(timings_, "loop_closure");
+    slam_->frameTracked({&frame, result.T_world_cam, trajectory_.back().T_world_cam, result.tracking_ok, scores, fused});
+  }
   frame_ms_.push_back(msSince(start));
   return result;
 }
@@ -152,13 +158,13 @@ MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, Trackin
   return e;
 }
 
-void FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores,
+bool FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores,
                                    bool late) {
   const int every = config_.pipeline.fusion_every;
   const bool due = frames_since_fusion_ >= every;
   if (!map_ || !due || (late && frames_since_fusion_ < 2 * every)) {
     ++frames_since_fusion_;
-    return;
+    return false;
   }
   frames_since_fusion_ = 1;
   finishFusion();
@@ -167,6 +173,23 @@ void FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_ca
     map_->integrate(frame, camera_, T_world_cam, weights);
     return msSince(start);
   });
+  return true;
+}
+
+void FlowFusionSystem::applyLoopCorrections() {
+  if (!slam_) return;
+  StageTimer timer(timings_, "loop_closure");
+  while (std::optional<MapCorrection> c = slam_->takeCorrection()) {
+    finishFusion();  // the map moves
+    if (map_) map_->moveSurfels(c->T_new_old_by_integration);
+    targets_.moveWorld(c->T_new_old_current);
+  }
+}
+
+void FlowFusionSystem::finishLoopClosure() {
+  if (!slam_) return;
+  slam_->finish();
+  applyLoopCorrections();
 }
 
 void FlowFusionSystem::finishFusion() const {

@@ -16,6 +16,7 @@
 #include "flowfusion/pipeline/segmentation_loop.h"
 #include "flowfusion/pipeline/system_config.h"
 #include "flowfusion/pipeline/tracking_target.h"
+#include "flowfusion/slam/loop_closer.h"
 
 namespace ff {
 
@@ -48,7 +49,19 @@ class FlowFusionSystem {
   // waited for it). The frame's images must stay unchanged until the next frame is processed.
   FrameResult process(const RgbdFrame& frame);
 
+  // The poses as tracked (what each FrameResult said).
   const Trajectory& trajectory() const { return trajectory_; }
+  // The poses after the last loop closure (slam/loop_closer.h); the tracked ones when loop closure
+  // is off or closed no loop.
+  Trajectory closedTrajectory() const { return slam_ ? slam_->trajectory() : trajectory_; }
+  // At the end of a run: waits for the loop checks still running and applies what they found to
+  // the map and closedTrajectory().
+  void finishLoopClosure();
+  bool loopClosureActive() const { return slam_ != nullptr; }
+  int loopClosures() const { return slam_ ? slam_->loopClosures() : 0; }
+  int slamKeyframes() const { return slam_ ? slam_->keyframes() : 0; }
+  // Why loop closure is off although configured (a build without Ceres); empty otherwise.
+  const std::string& loopClosureNote() const { return slam_note_; }
   // The map up to the last processed frame (waits for that frame's fusion).
   const StaticMap* map() const;
   // Waits likewise, so the last fusion's time is in.
@@ -71,7 +84,11 @@ class FlowFusionSystem {
   cv::Mat track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
   // Starts fusing the frame into the map on a worker thread (every fusion_every frames; a frame
   // past its budget leaves it to the next, up to 2 x fusion_every frames unfused).
-  void startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores, bool late);
+  // Returns whether it started one.
+  bool startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores, bool late);
+  // Applies the loop closures due: the map's surfels and the tracker's poses move to the corrected
+  // world frame (timed as "loop_closure").
+  void applyLoopCorrections();
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.
@@ -95,6 +112,8 @@ class FlowFusionSystem {
   int frames_since_fusion_;  // processed frames since the last fusion, this one included
   int failures_ = 0;
   int flow_restarts_ = 0;
+  std::unique_ptr<SlamBackEnd> slam_;  // null: loop closure off
+  std::string slam_note_;
   // The fusion running on a worker (its duration in ms); last, so it ends before the map goes.
   mutable std::future<double> fusion_;
 };

@@ -24,6 +24,9 @@ nlohmann::json toJson(const RunSummary& summary) {
   j["frames"] = summary.frames;
   j["tracking_failures"] = summary.tracking_failures;
   j["flow_restarts"] = summary.flow_restarts;
+  j["loop_closure"] = summary.loop_closure;
+  j["loop_closures"] = summary.loop_closures;
+  j["slam_keyframes"] = summary.slam_keyframes;
   j["mean_rounds"] = summary.mean_rounds;
   j["map_surfels"] = summary.map_surfels;
   j["map_budget_reached"] = summary.map_budget_reached;
@@ -98,14 +101,20 @@ class LiveMeter {
   LiveFigures figures_;
 };
 
-void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms,
+void summarise(RunSummary& s, FlowFusionSystem& system, const std::vector<double>& load_ms,
                std::optional<LiveMeter>& live) {
   if (live) {
     live->finish();
     s.live = live->figures();
   }
   if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
-  s.trajectory = system.trajectory();
+  system.finishLoopClosure();
+  s.tracked_trajectory = system.trajectory();
+  s.trajectory = system.closedTrajectory();
+  s.loop_closure = system.loopClosureActive();
+  s.loop_closures = system.loopClosures();
+  s.slam_keyframes = system.slamKeyframes();
+  if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
   s.tracking_failures = system.trackingFailures();
   s.flow_restarts = system.flowRestarts();
   s.load_ms_median = median(load_ms);

@@ -41,6 +41,7 @@ void validate(const SystemConfig& c) {
   validate(c.clustering);
   validate(c.scores);
   validate(c.fusion);
+  validate(c.slam, c.odometry.levels);
 }
 
 }  // namespace ff

@@ -10,6 +10,7 @@
 #include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/dynamic_score.h"
+#include "flowfusion/slam/slam_config.h"
 
 namespace ff {
 
@@ -76,9 +77,10 @@ struct SystemConfig {
   ClusteringConfig clustering;
   ScoreConfig scores;
   FusionConfig fusion;
+  SlamConfig slam;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry, flow, consensus, clustering, scores,
-                                                fusion)
+                                                fusion, slam)
 
 // Checks every section (each stage's validate()) and the pipeline's options against them.
 // Throws InputError naming the first bad setting.

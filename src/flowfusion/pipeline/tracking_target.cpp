@@ -80,4 +80,9 @@ void TrackingTargets::advance(TrackedFrame frame, bool tracking_ok, const cv::Ma
   previous_ = std::make_unique<TrackedFrame>(std::move(frame));
 }
 
+void TrackingTargets::moveWorld(const SE3& T_new_old) {
+  if (previous_) previous_->T_world_cam = orthonormalized(T_new_old * previous_->T_world_cam);
+  if (keyframe_) keyframe_->T_world_cam = orthonormalized(T_new_old * keyframe_->T_world_cam);
+}
+
 }  // namespace ff

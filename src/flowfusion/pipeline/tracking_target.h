@@ -56,6 +56,9 @@ class TrackingTargets {
   // frame's depth in a model keyframe.
   void advance(TrackedFrame frame, bool tracking_ok, const cv::Mat& dynamic_mask, const StaticMap* map,
                Timings& timings);
+  // Moves the kept frames' poses to another world frame (a loop closure's correction T_new_old);
+  // a model keyframe's rendered depth stays, since the map moves with it.
+  void moveWorld(const SE3& T_new_old);
   // Whether advance() with this pose, status and scores (`scored`: the frame has dynamic scores)
   // may render the map (a new model keyframe), so the map must be complete up to that frame first.
   bool rendersOnAdvance(const SE3& T_world_cam, bool tracking_ok, bool scored) const;
