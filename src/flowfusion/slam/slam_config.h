@@ -35,7 +35,7 @@ struct SlamConfig {
   int min_keyframe_gap = 8;    // a candidate is at least this many keyframes older
   // Geometric check: the odometry of the new keyframe against the candidate converged, and this
   // share of its static pixels with depth land on the candidate within the inlier bounds.
-  double min_inlier_fraction = 0.55;
+  double min_inlier_fraction = 0.65;
   double inlier_depth_m = 0.02;  // * max(1, depth in metres)
   double inlier_intensity = 0.08;  // [0, 1] grey
   // The loop found may not move the new keyframe from where the graph has it by more than this.
