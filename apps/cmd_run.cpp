@@ -79,8 +79,8 @@ void checkRate(double rate) {
 }
 
 void printSummary(const RunSummary& s, const FrameSource& source) {
-  std::printf("frames %zu, tracking failures %d, flow restarts %d, loop closures %d (%d keyframes), median ms per frame:",
-              s.frames, s.tracking_failures, s.flow_restarts, s.loop_closures, s.slam_keyframes);
+  std::printf("frames %zu, tracking failures %d, flow restarts %d, loop closures %d (%d corrections, %d keyframes), median ms per frame:",
+              s.frames, s.tracking_failures, s.flow_restarts, s.loop_closures, s.loop_corrections, s.slam_keyframes);
   for (const auto& stage : s.timings.stages()) std::printf(" %s %.1f", stage.c_str(), s.timings.medianMs(stage));
   std::printf(" (frame %.1f ms wall, overlapping stages counted once)\n", s.frame_ms_median);
   if (source.groundtruth()) {

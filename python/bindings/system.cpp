@@ -110,6 +110,7 @@ class PySystem {
     s.tracked_trajectory = system_.trajectory();
     s.loop_closure = system_.loopClosureActive();
     s.loop_closures = system_.loopClosures();
+    s.loop_corrections = system_.loopCorrections();
     s.slam_keyframes = system_.slamKeyframes();
     if (!system_.loopClosureNote().empty()) s.notes.push_back(system_.loopClosureNote());
     s.tracking_failures = system_.trackingFailures();

@@ -178,9 +178,15 @@ bool FlowFusionSystem::startFusion(const RgbdFrame& frame, const SE3& T_world_ca
 
 void FlowFusionSystem::applyLoopCorrections() {
   if (!slam_) return;
-  StageTimer timer(timings_, "loop_closure");
-  while (std::optional<MapCorrection> c = slam_->takeCorrection()) {
+  for (;;) {
+    std::optional<MapCorrection> c;
+    {
+      StageTimer timer(timings_, "loop_closure");  // waiting for a check still running when due
+      c = slam_->takeCorrection();
+    }
+    if (!c) return;
     finishFusion();  // the map moves
+    StageTimer timer(timings_, "loop_correction");
     if (map_) map_->moveSurfels(c->T_new_old_by_integration);
     targets_.moveWorld(c->T_new_old_current);
   }

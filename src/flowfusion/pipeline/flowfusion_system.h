@@ -59,6 +59,7 @@ class FlowFusionSystem {
   void finishLoopClosure();
   bool loopClosureActive() const { return slam_ != nullptr; }
   int loopClosures() const { return slam_ ? slam_->loopClosures() : 0; }
+  int loopCorrections() const { return slam_ ? slam_->corrections() : 0; }
   int slamKeyframes() const { return slam_ ? slam_->keyframes() : 0; }
   // Why loop closure is off although configured (a build without Ceres); empty otherwise.
   const std::string& loopClosureNote() const { return slam_note_; }
@@ -87,7 +88,7 @@ class FlowFusionSystem {
   // Returns whether it started one.
   bool startFusion(const RgbdFrame& frame, const SE3& T_world_cam, const cv::Mat& full_scores, bool late);
   // Applies the loop closures due: the map's surfels and the tracker's poses move to the corrected
-  // world frame (timed as "loop_closure").
+  // world frame (waiting for a check timed as "loop_closure", moving the map as "loop_correction").
   void applyLoopCorrections();
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;

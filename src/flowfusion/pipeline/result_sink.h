@@ -44,7 +44,8 @@ struct RunSummary {
   int tracking_failures = 0;
   int flow_restarts = 0;      // frames whose odometry restarted from the flow's rigid consensus
   bool loop_closure = false;  // a loop-closing back end ran (slam.loop_closure and a build with Ceres)
-  int loop_closures = 0;      // loop edges applied to the keyframe pose graph
+  int loop_closures = 0;      // verified loop edges in the keyframe pose graph
+  int loop_corrections = 0;   // solved graphs applied to the trajectory, the tracker and the map
   int slam_keyframes = 0;     // keyframes of the loop closer
   double mean_rounds = 0;     // segmentation <-> odometry rounds per frame (FrameResult::iterations)
   double load_ms_median = 0;  // waiting for the next frame (reading, decoding not hidden by the read-ahead)
@@ -60,7 +61,7 @@ struct RunSummary {
 };
 
 // The summary's figures as summary.json holds them (complete, stop_reason when not, frames, failures,
-// restarts, loop closure (loop_closure, loop_closures, slam_keyframes), rounds, map, memory, load and export times, per-stage timings, notes; a live run's
+// restarts, loop closure (loop_closure, loop_closures, loop_corrections, slam_keyframes), rounds, map, memory, load and export times, per-stage timings, notes; a live run's
 // frames_offered, frames_processed, frames_dropped, latency_ms_p50 and latency_ms_p95).
 nlohmann::json toJson(const RunSummary& summary);
 

@@ -26,6 +26,7 @@ nlohmann::json toJson(const RunSummary& summary) {
   j["flow_restarts"] = summary.flow_restarts;
   j["loop_closure"] = summary.loop_closure;
   j["loop_closures"] = summary.loop_closures;
+  j["loop_corrections"] = summary.loop_corrections;
   j["slam_keyframes"] = summary.slam_keyframes;
   j["mean_rounds"] = summary.mean_rounds;
   j["map_surfels"] = summary.map_surfels;
@@ -113,6 +114,7 @@ void summarise(RunSummary& s, FlowFusionSystem& system, const std::vector<double
   s.trajectory = system.closedTrajectory();
   s.loop_closure = system.loopClosureActive();
   s.loop_closures = system.loopClosures();
+  s.loop_corrections = system.loopCorrections();
   s.slam_keyframes = system.slamKeyframes();
   if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
   s.tracking_failures = system.trackingFailures();

@@ -43,6 +43,7 @@ class FernLoopCloser final : public SlamBackEnd {
   }
   Trajectory trajectory() const override;
   int loopClosures() const override { return closures_; }
+  int corrections() const override { return corrections_; }
   int keyframes() const override { return static_cast<int>(poses_.size()); }
 
  private:
@@ -61,6 +62,8 @@ class FernLoopCloser final : public SlamBackEnd {
   void addKeyframe(const TrackedFrameInfo& info);
   // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
   CheckResult check(int id, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses);
+  // Whether the solve moves some keyframe past slam.min_correction_m / _deg from where it is.
+  bool significant(const CheckResult& r) const;
   MapCorrection apply(const CheckResult& r);
 
   const SlamConfig config_;
@@ -72,6 +75,8 @@ class FernLoopCloser final : public SlamBackEnd {
   std::vector<int> anchors_;  // keyframe per map integration
   int frame_index_ = 0;
   int closures_ = 0;
+  int corrections_ = 0;
+  int loops_unapplied_ = 0;  // loop edges of solves too small to apply
   // The background checks' (one at a time, in keyframe order): index, images and graph edges.
   FernIndex index_;
   std::vector<std::shared_ptr<const KeyframeImages>> images_;
@@ -142,9 +147,20 @@ std::optional<MapCorrection> FernLoopCloser::takeCorrection() {
   while (!pending_.empty() && pending_.front().due_frame <= frame_index_) {
     const CheckResult r = pending_.front().result.get();
     pending_.pop_front();
-    if (r.loops > 0) return apply(r);
+    closures_ += r.loops;
+    loops_unapplied_ += r.loops;
+    if (r.loops > 0 && significant(r)) return apply(r);
   }
   return std::nullopt;
+}
+
+bool FernLoopCloser::significant(const CheckResult& r) const {
+  for (size_t i = 0; i < r.poses.size(); ++i) {
+    const SE3 moved = r.poses[i] * poses_[i].inverse();
+    if (translationNorm(moved) > config_.min_correction_m || rotationAngleDeg(moved) > config_.min_correction_deg)
+      return true;
+  }
+  return false;
 }
 
 MapCorrection FernLoopCloser::apply(const CheckResult& r) {
@@ -159,8 +175,9 @@ MapCorrection FernLoopCloser::apply(const CheckResult& r) {
   c.T_new_old_current = T_new_old.back();
   c.T_new_old_by_integration.reserve(anchors_.size());
   for (int a : anchors_) c.T_new_old_by_integration.push_back(a < 0 ? SE3::Identity() : T_new_old[a]);
-  c.loops = r.loops;
-  closures_ += r.loops;
+  c.loops = loops_unapplied_;
+  loops_unapplied_ = 0;
+  ++corrections_;
   return c;
 }
 
@@ -168,7 +185,7 @@ Trajectory FernLoopCloser::trajectory() const {
   Trajectory out;
   out.reserve(frames_.size());
   for (const FrameRef& f : frames_)
-    out.push_back({f.timestamp, closures_ == 0 || f.keyframe < 0 ? f.T_world_cam
+    out.push_back({f.timestamp, corrections_ == 0 || f.keyframe < 0 ? f.T_world_cam
                                                                  : orthonormalized(poses_[f.keyframe] * f.T_kf_cam)});
   return out;
 }

@@ -36,7 +36,7 @@ struct TrackedFrameInfo {
 struct MapCorrection {
   SE3 T_new_old_current;                      // the tracker's frame (the latest keyframe's correction)
   std::vector<SE3> T_new_old_by_integration;  // the map's surfels, by the integration that created them
-  int loops = 0;                              // loop edges this correction added
+  int loops = 0;                              // loop edges found since the last correction
 };
 
 class SlamBackEnd {
@@ -51,7 +51,8 @@ class SlamBackEnd {
   // The trajectory after the last applied correction: each frame's reported pose moved with its
   // keyframe (as tracked until a loop closes).
   virtual Trajectory trajectory() const = 0;
-  virtual int loopClosures() const = 0;  // loop edges applied
+  virtual int loopClosures() const = 0;  // verified loop edges in the graph
+  virtual int corrections() const = 0;   // solved graphs applied (past slam.min_correction_m / _deg)
   virtual int keyframes() const = 0;
 };
 

@@ -24,6 +24,8 @@ void validate(const SlamConfig& c, int odometry_levels) {
   if (!positive(c.inlier_intensity)) throw InputError("slam.inlier_intensity must be > 0 ([0, 1] grey)");
   if (!positive(c.max_correction_m)) throw InputError("slam.max_correction_m must be > 0 (metres)");
   if (!positive(c.max_correction_deg)) throw InputError("slam.max_correction_deg must be > 0 (degrees)");
+  if (!(c.min_correction_m >= 0)) throw InputError("slam.min_correction_m must be >= 0 (metres)");
+  if (!(c.min_correction_deg >= 0)) throw InputError("slam.min_correction_deg must be >= 0 (degrees)");
   if (!positive(c.odometry_sigma_m) || !positive(c.loop_sigma_m))
     throw InputError("slam.odometry_sigma_m and slam.loop_sigma_m must be > 0 (metres)");
   if (!positive(c.odometry_sigma_deg) || !positive(c.loop_sigma_deg))

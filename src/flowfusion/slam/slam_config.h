@@ -41,6 +41,11 @@ struct SlamConfig {
   // The loop found may not move the new keyframe from where the graph has it by more than this.
   double max_correction_m = 0.5;
   double max_correction_deg = 20.0;
+  // A solved graph moves the tracker and the map only when it moves some keyframe by more than
+  // this: below, its own noise (a millimetre or two per loop edge) is no better than the tracker's
+  // alignment to the map. The loop edges stay in the graph for the next solve.
+  double min_correction_m = 0.01;
+  double min_correction_deg = 0.5;
   // Pose graph: standard deviations of an odometry edge (between consecutive keyframes) and of a
   // loop edge; loop edges go through a Cauchy loss of this scale (in standard deviations).
   double odometry_sigma_m = 0.01;
@@ -57,7 +62,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlamConfig, loop_closure, keyfra
                                                 keyframe_rotation_deg, keyframe_level, fern_count, fern_image_width,
                                                 min_similarity, candidates, min_keyframe_gap, min_inlier_fraction,
                                                 inlier_depth_m, inlier_intensity, max_correction_m,
-                                                max_correction_deg, odometry_sigma_m, odometry_sigma_deg,
+                                                max_correction_deg, min_correction_m, min_correction_deg, odometry_sigma_m, odometry_sigma_deg,
                                                 loop_sigma_m, loop_sigma_deg, loop_loss_scale, apply_after_frames)
 
 // Throws InputError naming the setting when a value is out of range. `odometry_levels` bounds
