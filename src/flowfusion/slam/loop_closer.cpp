@@ -76,7 +76,6 @@ class FernLoopCloser final : public SlamBackEnd {
   int frame_index_ = 0;
   int closures_ = 0;
   int corrections_ = 0;
-  int loops_unapplied_ = 0;  // loop edges of solves too small to apply
   // The background checks' (one at a time, in keyframe order): index, images and graph edges.
   FernIndex index_;
   std::vector<std::shared_ptr<const KeyframeImages>> images_;
@@ -148,7 +147,6 @@ std::optional<MapCorrection> FernLoopCloser::takeCorrection() {
     const CheckResult r = pending_.front().result.get();
     pending_.pop_front();
     closures_ += r.loops;
-    loops_unapplied_ += r.loops;
     if (r.loops > 0 && significant(r)) return apply(r);
   }
   return std::nullopt;
@@ -175,8 +173,6 @@ MapCorrection FernLoopCloser::apply(const CheckResult& r) {
   c.T_new_old_current = T_new_old.back();
   c.T_new_old_by_integration.reserve(anchors_.size());
   for (int a : anchors_) c.T_new_old_by_integration.push_back(a < 0 ? SE3::Identity() : T_new_old[a]);
-  c.loops = loops_unapplied_;
-  loops_unapplied_ = 0;
   ++corrections_;
   return c;
 }

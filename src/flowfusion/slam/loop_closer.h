@@ -36,7 +36,6 @@ struct TrackedFrameInfo {
 struct MapCorrection {
   SE3 T_new_old_current;                      // the tracker's frame (the latest keyframe's correction)
   std::vector<SE3> T_new_old_by_integration;  // the map's surfels, by the integration that created them
-  int loops = 0;                              // loop edges found since the last correction
 };
 
 class SlamBackEnd {
