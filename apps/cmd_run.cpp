@@ -95,6 +95,7 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
   if (s.live) std::printf("real time: %s\n", liveLine(*s.live).c_str());
   std::printf("map: %zu surfels%s; peak memory %.0f MiB\n", s.map_surfels,
               s.map_budget_reached ? " (budget reached: raise fusion.max_surfels for more)" : "", s.peak_memory_mib);
+  if (s.lost_frames > 0) std::printf("lost %d frames, relocalized %d\n", s.lost_frames, s.relocalized_frames);
   for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
   std::printf("wrote:");
   for (const auto& w : s.written) std::printf(" %s", w.c_str());

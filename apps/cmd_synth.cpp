@@ -93,6 +93,10 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
                                           CLI::ignore_case));
   cmd->add_option("--laps", o->config.laps, "With --camera-path loop: this many laps (sets --frames; 0: --frames)")
       ->capture_default_str();
+  cmd->add_option("--cover-at", o->config.cover_at_s, "Kidnap: the view covered (black, no depth) from this s after the start")
+      ->capture_default_str();
+  cmd->add_option("--cover-s", o->config.cover_s, "Kidnap: for this many seconds (0: never), the camera moving on")
+      ->capture_default_str();
   cmd->add_option("--exposure-ms", o->config.exposure_ms,
                   "Motion blur: exposure time in ms over which camera and objects move (0: off)")
       ->capture_default_str();

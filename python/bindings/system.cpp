@@ -112,6 +112,8 @@ class PySystem {
     s.loop_closures = system_.loopClosures();
     s.loop_corrections = system_.loopCorrections();
     s.slam_keyframes = system_.slamKeyframes();
+    s.lost_frames = system_.lostFrames();
+    s.relocalized_frames = system_.relocalizedFrames();
     if (!system_.loopClosureNote().empty()) s.notes.push_back(system_.loopClosureNote());
     s.tracking_failures = system_.trackingFailures();
     s.flow_restarts = system_.flowRestarts();

@@ -43,6 +43,20 @@ TEST(LoopPath, ReturnsToItsStartEveryLapAfterLookingAllRound) {
   EXPECT_GT(rotationAngleDeg(start.inverse() * half), 150.0);                  // looking the other way
 }
 
+TEST(LoopPath, TheCoverWindowIsBlankAndTheCameraMovesOn) {
+  SynthConfig c = loop(1);
+  c.cover_at_s = 1.0;
+  c.cover_s = 0.5;
+  const SyntheticScene scene(c);
+  for (int i : {29, 30, 44, 45}) {
+    const SynthFrame f = scene.render(i);
+    const bool covered = i >= 30 && i < 45;
+    EXPECT_EQ(cv::countNonZero(f.frame.depth) == 0, covered) << "frame " << i;
+    EXPECT_EQ(cv::countNonZero(f.frame.intensity) == 0, covered) << "frame " << i;
+  }
+  EXPECT_GT(translationNorm(scene.cameraPose(30).inverse() * scene.cameraPose(45)), 0.2);
+}
+
 TEST(LoopPath, LapsWithoutALoopAreRefused) {
   SynthConfig c = loop(2);
   c.camera_path = CameraPathKind::Sweep;

@@ -76,6 +76,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     result.message = "first frame";
   } else {
     scores = track(frame, cur, result);
+    if (!result.tracking_ok && slam_) relocalize(frame, result, scores);
   }
 
   cv::Mat full_scores;
@@ -83,7 +84,9 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, config_.pipeline.mask_threshold);
   result.scores = scores;
-  const bool fused = startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
+  // A frame whose tracking failed stays out of the map when loop closure can find it again.
+  const bool fused =
+      (result.tracking_ok || !slam_) && startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
   // A new model keyframe is the map rendered at this frame's pose, this frame's fusion included.
   if (targets_.rendersOnAdvance(result.T_world_cam, result.tracking_ok, !scores.empty())) finishFusion();
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
@@ -190,6 +193,24 @@ void FlowFusionSystem::applyLoopCorrections() {
     if (map_) map_->moveSurfels(c->T_new_old_by_integration);
     targets_.moveWorld(c->T_new_old_current);
   }
+}
+
+void FlowFusionSystem::relocalize(const RgbdFrame& frame, FrameResult& result, cv::Mat& scores) {
+  ++lost_frames_;
+  StageTimer timer(timings_, "relocalization");
+  const std::optional<SE3> found = slam_->relocalize(frame, {});
+  if (!found) {
+    result.message += "; lost (no keyframe matches)";
+    return;
+  }
+  ++relocalized_frames_;
+  result.T_world_cam = *found;
+  result.tracking_ok = true;
+  result.message = "relocalized against the keyframes";
+  scores = cv::Mat();  // they were made against the failed target
+  T_prev_cur_velocity_ = SE3::Identity();
+  velocity_dt_ = 0;
+  targets_ = TrackingTargets(config_.pipeline, config_.odometry, camera_);  // this frame starts them again
 }
 
 void FlowFusionSystem::finishLoopClosure() {

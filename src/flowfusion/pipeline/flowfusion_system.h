@@ -60,6 +60,10 @@ class FlowFusionSystem {
   bool loopClosureActive() const { return slam_ != nullptr; }
   int loopClosures() const { return slam_ ? slam_->loopClosures() : 0; }
   int loopCorrections() const { return slam_ ? slam_->corrections() : 0; }
+  // With loop closure: frames whose tracking failed (not fused), and those of them whose pose was
+  // found again against the keyframes (tracking restarts there).
+  int lostFrames() const { return lost_frames_; }
+  int relocalizedFrames() const { return relocalized_frames_; }
   int slamKeyframes() const { return slam_ ? slam_->keyframes() : 0; }
   // Why loop closure is off although configured (a build without Ceres); empty otherwise.
   const std::string& loopClosureNote() const { return slam_note_; }
@@ -90,6 +94,9 @@ class FlowFusionSystem {
   // Applies the loop closures due: the map's surfels and the tracker's poses move to the corrected
   // world frame (waiting for a check timed as "loop_closure", moving the map as "loop_correction").
   void applyLoopCorrections();
+  // After a failed tracking (with loop closure): the frame's pose from the keyframes; found, the
+  // frame counts as tracked and the tracking targets start again from it (timed as "relocalization").
+  void relocalize(const RgbdFrame& frame, FrameResult& result, cv::Mat& scores);
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.
@@ -115,6 +122,8 @@ class FlowFusionSystem {
   int flow_restarts_ = 0;
   std::unique_ptr<SlamBackEnd> slam_;  // null: loop closure off
   std::string slam_note_;
+  int lost_frames_ = 0;
+  int relocalized_frames_ = 0;
   // The fusion running on a worker (its duration in ms); last, so it ends before the map goes.
   mutable std::future<double> fusion_;
 };

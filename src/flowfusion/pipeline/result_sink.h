@@ -47,6 +47,8 @@ struct RunSummary {
   int loop_closures = 0;      // verified loop edges in the keyframe pose graph
   int loop_corrections = 0;   // solved graphs applied to the trajectory, the tracker and the map
   int slam_keyframes = 0;     // keyframes of the loop closer
+  int lost_frames = 0;        // with loop closure: frames whose tracking failed (left out of the map)
+  int relocalized_frames = 0; // of those, the ones whose pose was found again against the keyframes
   double mean_rounds = 0;     // segmentation <-> odometry rounds per frame (FrameResult::iterations)
   double load_ms_median = 0;  // waiting for the next frame (reading, decoding not hidden by the read-ahead)
   double frame_ms_median = 0;  // FlowFusionSystem::process wall time per frame (its frameMs())
@@ -61,7 +63,7 @@ struct RunSummary {
 };
 
 // The summary's figures as summary.json holds them (complete, stop_reason when not, frames, failures,
-// restarts, loop closure (loop_closure, loop_closures, loop_corrections, slam_keyframes), rounds, map, memory, load and export times, per-stage timings, notes; a live run's
+// restarts, loop closure (loop_closure, loop_closures, loop_corrections, slam_keyframes, lost_frames, relocalized_frames), rounds, map, memory, load and export times, per-stage timings, notes; a live run's
 // frames_offered, frames_processed, frames_dropped, latency_ms_p50 and latency_ms_p95).
 nlohmann::json toJson(const RunSummary& summary);
 

@@ -28,6 +28,8 @@ nlohmann::json toJson(const RunSummary& summary) {
   j["loop_closures"] = summary.loop_closures;
   j["loop_corrections"] = summary.loop_corrections;
   j["slam_keyframes"] = summary.slam_keyframes;
+  j["lost_frames"] = summary.lost_frames;
+  j["relocalized_frames"] = summary.relocalized_frames;
   j["mean_rounds"] = summary.mean_rounds;
   j["map_surfels"] = summary.map_surfels;
   j["map_budget_reached"] = summary.map_budget_reached;
@@ -116,6 +118,8 @@ void summarise(RunSummary& s, FlowFusionSystem& system, const std::vector<double
   s.loop_closures = system.loopClosures();
   s.loop_corrections = system.loopCorrections();
   s.slam_keyframes = system.slamKeyframes();
+  s.lost_frames = system.lostFrames();
+  s.relocalized_frames = system.relocalizedFrames();
   if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
   s.tracking_failures = system.trackingFailures();
   s.flow_restarts = system.flowRestarts();

@@ -35,6 +35,7 @@ class FernLoopCloser final : public SlamBackEnd {
 
   void frameTracked(const TrackedFrameInfo& info) override;
   std::optional<MapCorrection> takeCorrection() override;
+  std::optional<SE3> relocalize(const RgbdFrame& frame, const cv::Mat& scores) override;
   void finish() override {
     for (Pending& p : pending_) {
       p.due_frame = frame_index_;
@@ -140,6 +141,21 @@ CheckResult FernLoopCloser::check(int id, std::shared_ptr<const KeyframeImages> 
     result.poses = optimizePoseGraph(poses, edges_, options);
   }
   return result;
+}
+
+std::optional<SE3> FernLoopCloser::relocalize(const RgbdFrame& frame, const cv::Mat& scores) {
+  for (Pending& p : pending_) p.result.wait();  // the checks are done with the index and images
+  const auto images = makeKeyframeImages(frame, camera_, scores, config_);
+  const std::vector<PlaceMatch> matches =
+      index_.query(index_.encode(*images), static_cast<int>(images_.size()) - 1, config_.candidates,
+                   config_.min_similarity);
+  for (const PlaceMatch& m : matches) {
+    const LoopCheck c = verifyLoop(*images, *images_[m.keyframe_id], SE3::Identity(), odometry_, config_);
+    spdlog::debug("relocalize: keyframe {} similarity {:.2f}: {}", m.keyframe_id, m.similarity,
+                  c.accepted ? "accepted" : c.reason);
+    if (c.accepted) return orthonormalized(poses_[m.keyframe_id] * c.T_candidate_query);
+  }
+  return std::nullopt;
 }
 
 std::optional<MapCorrection> FernLoopCloser::takeCorrection() {

@@ -45,6 +45,11 @@ class SlamBackEnd {
   // The next correction due before the next frame, if any (waits for its check when it still
   // runs); call until it returns none.
   virtual std::optional<MapCorrection> takeCorrection() = 0;
+  // After a tracking failure: the pose of `frame` found against the keyframes (the place index's
+  // best candidates, each checked as a loop is, from the candidate's own pose), none when no check
+  // passes. `scores`: b per pixel, empty for all static. Waits for the checks still running (the
+  // index is theirs) without applying them.
+  virtual std::optional<SE3> relocalize(const RgbdFrame& frame, const cv::Mat& scores) = 0;
   // Makes every check still running due, so takeCorrection() returns the rest (the run's end).
   virtual void finish() = 0;
   // The trajectory after the last applied correction: each frame's reported pose moved with its

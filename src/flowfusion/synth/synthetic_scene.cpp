@@ -455,6 +455,8 @@ void validate(const SynthConfig& c) {
     bad("pushed_objects must be in 0..4, got " + std::to_string(c.pushed_objects));
   if (!(c.rest_s >= 0 && c.rest_s <= 600)) bad("rest_s must be in [0, 600] s");
   if (!(c.exposure_ms >= 0 && c.exposure_ms <= 200)) bad("exposure_ms must be in [0, 200] ms");
+  if (!(c.cover_at_s >= 0 && c.cover_s >= 0 && std::isfinite(c.cover_at_s + c.cover_s)))
+    bad("cover_at_s and cover_s must be >= 0 s");
   if (c.laps < 0 || c.laps > 100) bad("laps must be in 0..100, got " + std::to_string(c.laps));
   if (c.laps > 0 && c.camera_path != CameraPathKind::Loop) bad("laps needs camera_path loop");
   if (c.camera_path == CameraPathKind::Loop && c.camera_motion != CameraMotion::Handheld)
@@ -510,7 +512,15 @@ SE3 SyntheticScene::objectPose(int k, double time_s) const {
   return model_->objects.at(k).path->T_world_object(time_s - config_.start_time);
 }
 
-SynthFrame SyntheticScene::render(int i) const { return renderAt(cameraPose(i), timestamp(i)); }
+SynthFrame SyntheticScene::render(int i) const {
+  SynthFrame f = renderAt(cameraPose(i), timestamp(i));
+  const double t = timestamp(i) - config_.start_time;
+  if (config_.cover_s > 0 && t >= config_.cover_at_s && t < config_.cover_at_s + config_.cover_s) {
+    for (cv::Mat* m : {&f.frame.color, &f.frame.intensity, &f.frame.depth, &f.mask, &f.object_id, &f.depth_clean})
+      m->setTo(0);
+  }
+  return f;
+}
 
 SynthFrame SyntheticScene::renderAt(const SE3& T_world_cam, double time_s) const {
   RenderOptions opt;

@@ -71,13 +71,18 @@ struct SynthConfig {
   // furniture near the centre is left out (the camera would pass through it).
   CameraPathKind camera_path = CameraPathKind::Sweep;
   int laps = 0;  // with camera_path loop: > 0 sets frames to this many laps (0: frames decides)
+  // A kidnap: the view covered (black, no depth, as a hand over the lens) for cover_s seconds from
+  // cover_at_s after the start, while the camera goes on moving (0: never).
+  double cover_at_s = 0;
+  double cover_s = 0;
   double exposure_ms = 0;   // ms, motion blur: colour averaged over this exposure centred on the timestamp (0: off)
   int exposure_samples = 8; // sub-frame renders averaged when exposure_ms > 0
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, frames, objects, width, height, fps, start_time,
                                                 camera_speed, camera_angular_speed, object_speed, noise, min_depth,
                                                 max_depth, color_noise, people, seats, near_objects, pushed_objects,
-                                                rest_s, camera_motion, camera_path, laps, exposure_ms,
+                                                rest_s, camera_motion, camera_path, laps, cover_at_s, cover_s,
+                                                exposure_ms,
                                                 exposure_samples)
 
 // The frames a configuration renders: `frames`, or `laps` laps of a loop at camera_speed and fps.
@@ -115,9 +120,10 @@ class SyntheticScene {
   int objectCount() const;
   SE3 objectPose(int k, double time_s) const;  // T_world_object of moving object k
 
-  SynthFrame render(int i) const;  // thread-safe, deterministic
+  SynthFrame render(int i) const;  // thread-safe, deterministic; blank inside the cover window
   // Any pose; objects are placed at time_s (a timestamp on the same clock as timestamp(i)).
-  // Noise is seeded by the time, so render(i) == renderAt(cameraPose(i), timestamp(i)).
+  // Noise is seeded by the time, so render(i) == renderAt(cameraPose(i), timestamp(i)) outside the
+  // cover window.
   SynthFrame renderAt(const SE3& T_world_cam, double time_s) const;
 
   // The articulated people: person k is moving objects firstPersonObject() + 12 k ... + 12 k + 11,
