@@ -22,9 +22,10 @@ function(flowfusion_stage name)
   install(TARGETS flowfusion_${name} EXPORT flowfusionTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endfunction()
 
-# flowfusion_test(STAGE DEPS ...): one GoogleTest executable from every .cpp in tests/STAGE.
+# flowfusion_test(STAGE DEPS ... [TEST_PROPERTIES ...]): one GoogleTest executable from every .cpp in
+# tests/STAGE; TEST_PROPERTIES are set on each of its tests (e.g. a fixture they need).
 function(flowfusion_test stage)
-  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;TEST_PROPERTIES" ${ARGN})
   file(GLOB _sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${stage}/*.cpp)
   if(NOT _sources)
     return()
@@ -32,5 +33,5 @@ function(flowfusion_test stage)
   add_executable(test_${stage} ${_sources})
   target_link_libraries(test_${stage} PRIVATE flowfusion_testing ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   gtest_discover_tests(test_${stage} DISCOVERY_TIMEOUT 60
-    PROPERTIES ENVIRONMENT "FLOWFUSION_SHARED_DATA=${FLOWFUSION_SHARED_DATA}")
+    PROPERTIES ENVIRONMENT "FLOWFUSION_SHARED_DATA=${FLOWFUSION_SHARED_DATA}" ${ARG_TEST_PROPERTIES})
 endfunction()

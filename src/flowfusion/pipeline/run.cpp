@@ -43,6 +43,19 @@ nlohmann::json toJson(const RunSummary& summary) {
   return j;
 }
 
+void summariseSystem(RunSummary& s, const FlowFusionSystem& system) {
+  s.trajectory = system.trajectory();
+  s.tracking_failures = system.trackingFailures();
+  s.flow_restarts = system.flowRestarts();
+  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
+  s.timings = system.timings();
+  if (const StaticMap* map = system.map()) {
+    s.map_surfels = map->size();
+    s.map_budget_reached = map->budgetReached();
+  }
+  s.peak_memory_mib = eval::peakResidentMiB();
+}
+
 namespace {
 
 // Reads the next frame and records how long the run waited for it (with read-ahead: the decoding
@@ -105,17 +118,8 @@ void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<
     s.live = live->figures();
   }
   if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
-  s.trajectory = system.trajectory();
-  s.tracking_failures = system.trackingFailures();
-  s.flow_restarts = system.flowRestarts();
   s.load_ms_median = median(load_ms);
-  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
-  s.timings = system.timings();
-  if (const StaticMap* map = system.map()) {
-    s.map_surfels = map->size();
-    s.map_budget_reached = map->budgetReached();
-  }
-  s.peak_memory_mib = eval::peakResidentMiB();
+  summariseSystem(s, system);
 }
 
 void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFusionSystem& system) {
@@ -153,6 +157,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       for (ResultSink* sink : sinks) sink->frame(*frame, r);
       ++summary.frames;
       summary.mean_rounds += r.iterations;
+      if (control.after_frame) control.after_frame(*system);
     }
   } catch (const std::exception& e) {
     summary.complete = false;

@@ -2,6 +2,7 @@
 // A run: frames from a source, through the system, to the sinks (`flowfusion run`, `bench`, the
 // Python package). The loop knows nothing of files; FilesSink (pipeline/files_sink.h) writes them.
 #include <atomic>
+#include <functional>
 #include <vector>
 
 #include "flowfusion/io/frame_source.h"
@@ -17,10 +18,18 @@ struct RunControl {
   // Frames read ahead on a worker thread while the current one is processed (io/prefetching_source.h);
   // 0 reads each frame on the run's thread when it is needed (for a source whose next() must stay there).
   size_t prefetch_frames = 2;
+  // Called on the run's thread after each frame's sinks with the system as it stands then (map and
+  // trajectory up to that frame): a live node publishes its map now and then and saves on request
+  // (ros/). The system lives until runSequence returns.
+  std::function<void(const FlowFusionSystem&)> after_frame = {};
 };
 
 // The ground truth's pose at `timestamp` (s) when the source has one, else identity.
 SE3 initialPose(const FrameSource& source, double timestamp);
+
+// The summary's figures the system holds: trajectory, tracking failures, flow restarts, median frame
+// time, stage timings, map size and budget, peak memory (a run's files written before it ended).
+void summariseSystem(RunSummary& summary, const FlowFusionSystem& system);
 
 // Processes every frame of `source`. A frame that throws (also one the read-ahead failed to read)
 // ends the sinks with an incomplete summary (the frames before it kept) and is rethrown.
