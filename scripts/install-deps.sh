@@ -20,3 +20,9 @@ $SUDO apt-get install -y -qq --no-install-recommends librosbag-storage-dev libse
 # recordings are written by the MCAP project's npm packages, which the build installs with `npm ci`
 # from tests/fixtures/ros2bag/package-lock.json (Node 20 and npm; the tests skip without them).
 $SUDO apt-get install -y -qq --no-install-recommends libzstd-dev liblz4-dev libsqlite3-dev
+# The ROS 1 node (`flowfusion ros`): roscpp, message_filters, tf2_ros, nav_msgs, diagnostic_updater and
+# std_srvs headers (with the bag packages above); its tests start roscore and use rosbag play/record and
+# rosservice (ros-core, python3-std-srvs). Without them flowfusion builds, `flowfusion ros` says how to
+# enable it and the node's tests skip.
+$SUDO apt-get install -y -qq --no-install-recommends ros-core libroscpp-dev libmessage-filters-dev libtf2-ros-dev \
+  libnav-msgs-dev libgeometry-msgs-dev libdiagnostic-updater-dev libstd-srvs-dev python3-std-srvs

@@ -272,6 +272,9 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
   EXPECT_EQ(recorder.stop(SIGINT), 0) << recorder.log();
   EXPECT_EQ(node->stop(SIGINT), 0) << node->log();
   EXPECT_EQ(node->log().find("ERROR"), std::string::npos) << node->log();
+  EXPECT_NE(node->log().find("wrote 8 frames into " + saved.string() + " (partial: interrupted (SIGINT))"),
+            std::string::npos)
+      << node->log();
   const std::string summary = fileText(saved / "summary.json");
   EXPECT_NE(summary.find("\"complete\": false"), std::string::npos) << summary;
   EXPECT_NE(summary.find("interrupted (SIGINT)"), std::string::npos) << summary;
@@ -317,6 +320,21 @@ TEST_F(RosNodeTest, AWrongEncodingKeepsTheNodeAliveWithOneLoggedError) {
   for (size_t at = log.find("ERROR"); at != std::string::npos; at = log.find("ERROR", at + 1)) ++errors;
   EXPECT_EQ(errors, 1u) << log;
   EXPECT_NE(log.find("colour encoding 'yuv422' is not one of rgb8"), std::string::npos) << log;
+}
+
+// The README's launch files start the node (through examples/ros/flowfusion_node) on each driver's topics.
+TEST_F(RosNodeTest, TheLaunchFilesStartTheNodeOnTheDriversTopics) {
+  setenv("ROS_PACKAGE_PATH", FLOWFUSION_ROS_EXAMPLES, 1);
+  setenv("FLOWFUSION", FLOWFUSION_APP_PATH, 1);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"realsense.launch", "/camera/aligned_depth_to_color/image_raw"}, {"openni.launch", "/camera/depth_registered/image_raw"}};
+  for (const auto& [launch, depth_topic] : cases) {
+    Process roslaunch({"roslaunch", "flowfusion_ros", launch}, tmp.path() / (launch + ".log"));
+    EXPECT_TRUE(eventually([&] { return shellSays("rostopic info " + depth_topic, "/flowfusion"); }, 30))
+        << roslaunch.log();
+    EXPECT_EQ(roslaunch.stop(SIGINT), 0) << roslaunch.log();
+    EXPECT_EQ(roslaunch.log().find("ERROR"), std::string::npos) << roslaunch.log();
+  }
 }
 
 #endif

@@ -1,6 +1,7 @@
 #include "flowfusion/ros/live_session.h"
 
 #include <atomic>
+#include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <ros/console.h>
 #include <stdexcept>
@@ -79,11 +80,12 @@ class LiveSession::KeptRun : public ResultSink {
   }
   void end(RunSummary& summary, const FlowFusionSystem& system) override {
     if (!save_at_end_) return;
+    // On stderr: ROS's logging has shut down with the node.
     try {
       RunSummary partial = summary;
-      ROS_INFO_STREAM("flowfusion: " << write(partial, system));
+      std::fprintf(stderr, "flowfusion: %s\n", write(partial, system).c_str());
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM("flowfusion: writing the partial result failed: " << e.what());
+      std::fprintf(stderr, "flowfusion: error: writing the partial result failed: %s\n", e.what());
     }
   }
 

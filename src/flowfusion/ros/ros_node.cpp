@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 #include <set>
 
 #include "flowfusion/core/error.h"
@@ -191,12 +192,12 @@ void RosNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
 void RosNode::spin() {
   ros::AsyncSpinner services(1, &service_queue_);
   services.start();
-  ros::spin();
+  ros::spin();  // returns once ROS has shut down (its logging too)
   services.stop();
   std::shared_ptr<LiveSession> s = session();
   if (!s) return;
   const std::string reason = shutdownReason();
-  ROS_INFO_STREAM("flowfusion: " << reason << "; stopping the run");
+  std::fprintf(stderr, "flowfusion: %s; stopping the run after %zu frames\n", reason.c_str(), s->figures().frames_processed);
   s->stop(reason, !params_.save_dir.empty());
 }
 
