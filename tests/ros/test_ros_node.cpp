@@ -13,6 +13,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -23,6 +24,7 @@
 #include "testing/test_util.h"
 
 #if defined(FLOWFUSION_HAVE_ROS_NODE) && defined(FLOWFUSION_ROS_TOOLS)
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -62,6 +64,7 @@ using ImageMsg = ros1::ImageMsg;
 using CameraInfoMsg = ros1::CameraInfoMsg;
 using OdometryMsg = nav_msgs::Odometry_<ros1::RosAllocator<void>>;
 using CloudMsg = sensor_msgs::PointCloud2_<ros1::RosAllocator<void>>;
+using DiagnosticsMsg = diagnostic_msgs::DiagnosticArray_<ros1::RosAllocator<void>>;
 
 constexpr int kFrames = 8;
 constexpr double kDepthScale = 1000;  // the node's and bags' 16UC1 units per metre
@@ -285,8 +288,9 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
     const auto& p = odometry[i]->pose.pose;
     const SE3& T = offline.poses[i].second;
     EXPECT_EQ(odometry[i]->header.stamp, stamps[i]);
-    EXPECT_EQ(odometry[i]->header.frame_id, "map");
-    EXPECT_EQ(odometry[i]->child_frame_id, "camera_rgb_optical_frame");
+    EXPECT_EQ(std::string(odometry[i]->header.frame_id.begin(), odometry[i]->header.frame_id.end()), "map");
+    EXPECT_EQ(std::string(odometry[i]->child_frame_id.begin(), odometry[i]->child_frame_id.end()),
+              "camera_rgb_optical_frame");
     const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     EXPECT_LT((Eigen::Vector3d(p.position.x, p.position.y, p.position.z) - T.translation()).norm(), 1e-9) << i;
     EXPECT_LT((q.toRotationMatrix() - T.rotation()).cwiseAbs().maxCoeff(), 1e-9) << i;
@@ -305,6 +309,17 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
   EXPECT_GT(clouds.back()->width, 1000u);
   EXPECT_EQ(clouds.back()->header.frame_id, "map");
   EXPECT_EQ(clouds.back()->point_step, 16u);
+  // The last diagnostics: every frame received and processed, none dropped.
+  std::map<std::string, std::string> figures;
+  for (const auto& array : messages<DiagnosticsMsg>(recorded.string(), "/diagnostics"))
+    for (const auto& status : array->status)
+      if (std::string(status.name.begin(), status.name.end()).find("flowfusion") != std::string::npos)
+        for (const auto& kv : status.values)
+          figures[std::string(kv.key.begin(), kv.key.end())] = std::string(kv.value.begin(), kv.value.end());
+  EXPECT_EQ(figures["frames received"], std::to_string(kFrames));
+  EXPECT_EQ(figures["frames processed"], std::to_string(kFrames));
+  EXPECT_EQ(figures["frames dropped"], "0");
+  EXPECT_EQ(figures["frames refused"], "0");
 }
 
 TEST_F(RosNodeTest, AWrongEncodingKeepsTheNodeAliveWithOneLoggedError) {
