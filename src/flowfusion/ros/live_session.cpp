@@ -159,6 +159,7 @@ void LiveSession::run() {
   }
   system_ = nullptr;  // still under the source's lock: the system is gone
   source_->release();
+  ended_ = true;
 }
 
 std::string LiveSession::save() {

@@ -5,6 +5,7 @@
 // ~save_dir is set, the run's masks kept (PNG, in memory) so that ~save can write the files `run`
 // writes at any time. The system is read between frames only: while a frame is processed the run
 // holds the source, and ~save waits for it.
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -35,6 +36,8 @@ class LiveSession {
   // ~save_dir set) the run so far is written, marked partial with `reason` (summary.json).
   void stop(const std::string& reason, bool save_partial);
   LiveFigures figures() const { return publisher_.figures(); }
+  // The run ended on its own (an error it logged): frames offered now go nowhere.
+  bool ended() const { return ended_; }
 
  private:
   class Source;
@@ -47,6 +50,7 @@ class LiveSession {
   std::unique_ptr<KeptRun> kept_;  // null without ~save_dir
   const FlowFusionSystem* system_ = nullptr;  // between the first frame and the run's end, under the source's lock
   bool stopped_ = false;
+  std::atomic<bool> ended_{false};
   std::thread thread_;  // last
 };
 

@@ -129,7 +129,7 @@ void RosNode::onFrames(const sensor_msgs::ImageConstPtr& color, const sensor_msg
   ++received_;
   try {
     RgbdFrame frame = intake_.take(*color, *depth, info.get());
-    if (!session_) session_ = std::make_shared<LiveSession>(params_, intake_, publishers_);
+    if (!session_ || session_->ended()) session_ = std::make_shared<LiveSession>(params_, intake_, publishers_);
     session_->offer(std::move(frame));
   } catch (const InputError& e) {
     ++refused_;
