@@ -218,6 +218,7 @@ class RosNodeTest : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!useFixtureMaster()) GTEST_SKIP() << "no roscore: run through ctest, whose fixture RosCore.Start starts one";
+    testing::runShell("rosparam delete /flowfusion");  // private parameters an earlier test's node left
   }
   // The node with `args`, once its services are up.
   std::unique_ptr<Process> startNode(const std::vector<std::string>& args) {
@@ -322,19 +323,33 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
   EXPECT_EQ(figures["frames refused"], "0");
 }
 
-TEST_F(RosNodeTest, AWrongEncodingKeepsTheNodeAliveWithOneLoggedError) {
-  const std::string bag = (tmp.path() / "yuv.bag").string();
-  writeBag(bag, "yuv422");
-  auto node = startNode({});
-  play(bag);
-  EXPECT_TRUE(node->running()) << node->log();
+size_t occurrences(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// Bad parameters, a colour encoding the node cannot read and stamps going back (a bag played again):
+// each logged once with its reason, the node running on.
+TEST_F(RosNodeTest, BadParametersAndMessagesAreLoggedOnceAndTheNodeRunsOn) {
+  const std::string yuv = (tmp.path() / "yuv.bag").string(), good = (tmp.path() / "good.bag").string();
+  writeBag(yuv, "yuv422");
+  writeBag(good);
+  auto node = startNode({"_depth_scale:=-3", "_map_period_s:=soon", "_set:=odometry.no_such_key=1"});
+  play(yuv);
   EXPECT_TRUE(shellSays("rosservice call /flowfusion/save", "no frame processed yet"));
+  play(good);
+  play(good);
+  EXPECT_TRUE(node->running()) << node->log();
   EXPECT_EQ(node->stop(SIGINT), 0) << node->log();
   const std::string log = node->log();
-  size_t errors = 0;
-  for (size_t at = log.find("ERROR"); at != std::string::npos; at = log.find("ERROR", at + 1)) ++errors;
-  EXPECT_EQ(errors, 1u) << log;
-  EXPECT_NE(log.find("colour encoding 'yuv422' is not one of rgb8"), std::string::npos) << log;
+  EXPECT_EQ(occurrences(log, "ERROR"), 5u) << log;
+  EXPECT_EQ(occurrences(log, "parameter ~depth_scale ignored: must be 16UC1 depth units per metre"), 1u) << log;
+  EXPECT_EQ(occurrences(log, "parameter ~map_period_s ignored"), 1u) << log;
+  EXPECT_EQ(occurrences(log, "parameter ~set odometry.no_such_key=1 ignored"), 1u) << log;
+  EXPECT_EQ(occurrences(log, "colour encoding 'yuv422' is not one of rgb8"), 1u) << log;
+  EXPECT_EQ(occurrences(log, "(stamps going back"), 1u) << log;
+  EXPECT_NE(log.find("stopping the run after 8 frames"), std::string::npos) << log;
 }
 
 // The README's launch files start the node (through examples/ros/flowfusion_node) on each driver's topics.

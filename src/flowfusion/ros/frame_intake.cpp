@@ -1,6 +1,5 @@
 #include "flowfusion/ros/frame_intake.h"
 
-#include "flowfusion/core/error.h"
 #include "flowfusion/io/ros_images.h"
 #include "flowfusion/io/tum_sequence.h"
 
@@ -51,7 +50,7 @@ RgbdFrame FrameIntake::take(const sensor_msgs::Image& color, const sensor_msgs::
     learnCamera(*info);
   }
   if (last_stamp_ && !(color.header.stamp > *last_stamp_))
-    throw InputError("colour: header stamp " + timestampName(seconds(color.header.stamp)) +
+    throw StampsGoingBack("colour: header stamp " + timestampName(seconds(color.header.stamp)) +
                      " is not after the last frame's " + timestampName(seconds(*last_stamp_)) +
                      " (stamps going back: a bag played again or a clock reset?); frames are refused until they are "
                      "after it, or call ~reset");

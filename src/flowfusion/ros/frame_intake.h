@@ -12,6 +12,7 @@
 #include <sensor_msgs/Image.h>
 #include <string>
 
+#include "flowfusion/core/error.h"
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/undistortion.h"
 #include "flowfusion/ros/node_params.h"
@@ -24,12 +25,19 @@ struct ColorHeader {
   std::string frame_id;
 };
 
+// A colour stamp not after the last frame's; its message names the stamps, so the node logs the
+// kind once rather than each message.
+struct StampsGoingBack : InputError {
+  using InputError::InputError;
+};
+
 class FrameIntake {
  public:
   explicit FrameIntake(const NodeParams& params);
 
   // The frame of these messages; `info` is null when the camera was given. Throws InputError naming
-  // the topic and the reason; a colour stamp not after the last one taken is refused until reset().
+  // the topic and the reason; a colour stamp not after the last one taken is refused until reset()
+  // (StampsGoingBack).
   RgbdFrame take(const sensor_msgs::Image& color, const sensor_msgs::Image& depth, const sensor_msgs::CameraInfo* info);
   // The camera once known (given, or the first usable CameraInfo) and its undistortion (null: none).
   const std::optional<CameraModel>& camera() const { return camera_; }

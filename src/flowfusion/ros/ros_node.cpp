@@ -134,7 +134,8 @@ void RosNode::onFrames(const sensor_msgs::ImageConstPtr& color, const sensor_msg
   } catch (const InputError& e) {
     ++refused_;
     last_refusal_ = e.what();
-    if (logged_.insert(last_refusal_).second)
+    const bool stamps = dynamic_cast<const StampsGoingBack*>(&e) != nullptr;
+    if (logged_.insert(stamps ? "stamps going back" : last_refusal_).second)
       ROS_ERROR_STREAM("flowfusion: frame refused: " << last_refusal_ << " (logged once; diagnostics count them all)");
   }
 }
