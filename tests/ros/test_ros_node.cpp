@@ -330,7 +330,7 @@ size_t occurrences(const std::string& text, const std::string& what) {
 }
 
 // Bad parameters, a colour encoding the node cannot read and stamps going back (a bag played again):
-// each logged once with its reason, the node running on.
+// each logged once with its reason, the node running on; after ~reset the bag is a new run.
 TEST_F(RosNodeTest, BadParametersAndMessagesAreLoggedOnceAndTheNodeRunsOn) {
   const std::string yuv = (tmp.path() / "yuv.bag").string(), good = (tmp.path() / "good.bag").string();
   writeBag(yuv, "yuv422");
@@ -340,6 +340,8 @@ TEST_F(RosNodeTest, BadParametersAndMessagesAreLoggedOnceAndTheNodeRunsOn) {
   EXPECT_TRUE(shellSays("rosservice call /flowfusion/save", "no frame processed yet"));
   play(good);
   play(good);
+  EXPECT_TRUE(shellSays("rosservice call /flowfusion/reset", "the run ended; the next frame starts a new one"));
+  play(good);  // after ~reset, a new run of the same frames
   EXPECT_TRUE(node->running()) << node->log();
   EXPECT_EQ(node->stop(SIGINT), 0) << node->log();
   const std::string log = node->log();
