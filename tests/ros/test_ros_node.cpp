@@ -2,9 +2,11 @@
 // (tests/ros/roscore_fixture.sh) starts on 127.0.0.1 at a free port: a bag of a short synthetic
 // dynamic sequence is played with `rosbag play -r 0.2`, the node's outputs recorded with `rosbag
 // record` and compared with the offline run of the same bag: the same poses and masks (nothing is
-// dropped at that rate), stamped with the colour images' stamps; the static cloud published; ~save
-// writes what `run` writes; SIGINT ends the node cleanly with a partial result. A bag whose colour
-// has an encoding the node cannot read keeps it alive with one logged error.
+// dropped at that rate), stamped with the colour images' stamps, on ~odometry, /tf and ~mask; the
+// static cloud published; diagnostics counting every frame; ~save writes what `run` writes; SIGINT
+// ends the node cleanly with a partial result. Bad parameters, a colour encoding the node cannot read
+// and stamps going back keep it alive, each with one logged error; ~reset starts a new run; the
+// README's launch files start it on the RealSense and OpenNI drivers' topics.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -29,6 +31,7 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -64,6 +67,7 @@ using ImageMsg = ros1::ImageMsg;
 using CameraInfoMsg = ros1::CameraInfoMsg;
 using OdometryMsg = nav_msgs::Odometry_<ros1::RosAllocator<void>>;
 using CloudMsg = sensor_msgs::PointCloud2_<ros1::RosAllocator<void>>;
+using TfMsg = tf2_msgs::TFMessage_<ros1::RosAllocator<void>>;
 using DiagnosticsMsg = diagnostic_msgs::DiagnosticArray_<ros1::RosAllocator<void>>;
 
 constexpr int kFrames = 8;
@@ -245,7 +249,7 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
   const fs::path saved = tmp.path() / "saved", recorded = tmp.path() / "out.bag";
   auto node = startNode({"_save_dir:=" + saved.string(), "_map_period_s:=0.05"});
   const std::vector<std::string> topics = {"/flowfusion/odometry", "/flowfusion/mask", "/flowfusion/static_cloud",
-                                           "/flowfusion/path", "/diagnostics"};
+                                           "/flowfusion/path", "/diagnostics", "/tf"};
   std::vector<std::string> record = {"rosbag", "record", "-O", recorded.string(), "__name:=recorder"};
   record.insert(record.end(), topics.begin(), topics.end());
   Process recorder(record, tmp.path() / "record.log");
@@ -295,6 +299,15 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
     const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     EXPECT_LT((Eigen::Vector3d(p.position.x, p.position.y, p.position.z) - T.translation()).norm(), 1e-9) << i;
     EXPECT_LT((q.toRotationMatrix() - T.rotation()).cwiseAbs().maxCoeff(), 1e-9) << i;
+  }
+  const auto tf = messages<TfMsg>(recorded.string(), "/tf");
+  ASSERT_EQ(tf.size(), size_t(kFrames));
+  for (int i = 0; i < kFrames; ++i) {
+    ASSERT_EQ(tf[i]->transforms.size(), 1u);
+    const auto& t = tf[i]->transforms[0];
+    EXPECT_EQ(t.header.stamp, stamps[i]);
+    EXPECT_EQ(std::string(t.child_frame_id.begin(), t.child_frame_id.end()), "camera_rgb_optical_frame");
+    EXPECT_EQ(t.transform.translation.x, odometry[i]->pose.pose.position.x);
   }
   const auto masks = messages<ImageMsg>(recorded.string(), "/flowfusion/mask");
   ASSERT_EQ(masks.size(), size_t(kFrames));
