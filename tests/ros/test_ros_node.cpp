@@ -90,6 +90,7 @@ class Process {
   Process(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
     pid_ = fork();
     if (pid_ == 0) {
+      setpgid(0, 0);  // its own group: a wrapper (rosbag, roslaunch) is signalled with what it started
       FILE* out = std::fopen(log.c_str(), "w");
       dup2(fileno(out), 1);
       dup2(fileno(out), 2);
@@ -102,7 +103,7 @@ class Process {
   }
   ~Process() {
     if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
+      kill(-pid_, SIGKILL);
       waitpid(pid_, nullptr, 0);
     }
   }
@@ -115,9 +116,9 @@ class Process {
     }
     return !exited_;
   }
-  // Sends `signal` and waits for the exit; its status (128 + signal when killed), -1 after 20 s.
+  // Sends `signal` to its group and waits for the exit; its status (128 + signal when killed), -1 after 20 s.
   int stop(int signal) {
-    kill(pid_, signal);
+    kill(-pid_, signal);
     for (int i = 0; i < 200 && running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     return exited_ ? status_ : -1;
   }
