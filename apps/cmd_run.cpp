@@ -53,7 +53,7 @@ class ProgressSink : public ResultSink {
     else
       std::fprintf(stderr, "\rframe %zu/%zu", done_, total_);
   }
-  void end(RunSummary&, const FlowFusionSystem&) override { std::fprintf(stderr, "\n"); }
+  void end(RunSummary&, const StaticMap*) override { std::fprintf(stderr, "\n"); }
 
  private:
   size_t done_ = 0, total_ = 0;

@@ -35,9 +35,10 @@ struct ProbeSink : ResultSink {
     EXPECT_EQ(r.timestamp, f.timestamp);
     if (stop && stamps.size() == stop_after) *stop = true;
   }
-  void end(RunSummary& s, const FlowFusionSystem& system) override {
+  void end(RunSummary& s, const StaticMap* map) override {
     calls.push_back(s.complete ? "end complete" : "end incomplete");
-    EXPECT_EQ(system.trajectory().size(), s.frames);
+    EXPECT_EQ(s.trajectory.size(), s.frames);
+    EXPECT_NE(map, nullptr);
   }
 };
 

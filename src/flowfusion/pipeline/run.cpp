@@ -43,6 +43,20 @@ nlohmann::json toJson(const RunSummary& summary) {
   return j;
 }
 
+void summariseSystem(RunSummary& s, const FlowFusionSystem& system, long summed_rounds) {
+  if (s.frames > 0) s.mean_rounds = static_cast<double>(summed_rounds) / static_cast<double>(s.frames);
+  s.trajectory = system.trajectory();
+  s.tracking_failures = system.trackingFailures();
+  s.flow_restarts = system.flowRestarts();
+  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
+  s.timings = system.timings();
+  if (const StaticMap* map = system.map()) {
+    s.map_surfels = map->size();
+    s.map_budget_reached = map->budgetReached();
+  }
+  s.peak_memory_mib = eval::peakResidentMiB();
+}
+
 namespace {
 
 // Reads the next frame and records how long the run waited for it (with read-ahead: the decoding
@@ -98,28 +112,20 @@ class LiveMeter {
   LiveFigures figures_;
 };
 
-void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms,
+// The summary of runSequence's loop: the system's figures, the read time and a live run's figures.
+void summarise(RunSummary& s, const FlowFusionSystem& system, long summed_rounds, const std::vector<double>& load_ms,
                std::optional<LiveMeter>& live) {
   if (live) {
     live->finish();
     s.live = live->figures();
   }
-  if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
-  s.trajectory = system.trajectory();
-  s.tracking_failures = system.trackingFailures();
-  s.flow_restarts = system.flowRestarts();
+  summariseSystem(s, system, summed_rounds);
   s.load_ms_median = median(load_ms);
-  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
-  s.timings = system.timings();
-  if (const StaticMap* map = system.map()) {
-    s.map_surfels = map->size();
-    s.map_budget_reached = map->budgetReached();
-  }
-  s.peak_memory_mib = eval::peakResidentMiB();
 }
 
 void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFusionSystem& system) {
-  for (ResultSink* sink : sinks) sink->end(s, system);
+  const StaticMap* map = system.map();
+  for (ResultSink* sink : sinks) sink->end(s, map);
 }
 
 }  // namespace
@@ -138,6 +144,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
   std::vector<double> load_ms;
   std::unique_ptr<FlowFusionSystem> system;
   RunSummary summary;
+  long summed_rounds = 0;  // FrameResult::iterations over the frames
   try {
     for (std::optional<RgbdFrame> frame = nextFrame(frames, load_ms); frame; frame = nextFrame(frames, load_ms)) {
       if (control.stop && control.stop->load()) {
@@ -152,13 +159,13 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       if (live) live->processed();
       for (ResultSink* sink : sinks) sink->frame(*frame, r);
       ++summary.frames;
-      summary.mean_rounds += r.iterations;
+      summed_rounds += r.iterations;
     }
   } catch (const std::exception& e) {
     summary.complete = false;
     summary.stop_reason = e.what();
     if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-    summarise(summary, *system, load_ms, live);
+    summarise(summary, *system, summed_rounds, load_ms, live);
     try {
       endSinks(sinks, summary, *system);
     } catch (const std::exception&) {
@@ -167,7 +174,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
     throw;
   }
   if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-  summarise(summary, *system, load_ms, live);
+  summarise(summary, *system, summed_rounds, load_ms, live);
   endSinks(sinks, summary, *system);
   return summary;
 }

@@ -22,6 +22,12 @@ struct RunControl {
 // The ground truth's pose at `timestamp` (s) when the source has one, else identity.
 SE3 initialPose(const FrameSource& source, double timestamp);
 
+// What a run's summary takes from the system after its last frame, for runSequence and for any
+// loop of its own (the Python System's save()): trajectory, tracking failures, flow restarts,
+// per-stage timings, process()'s median wall time, the map's size, the peak memory, and
+// mean_rounds from summed_rounds (FrameResult::iterations summed over summary.frames frames).
+void summariseSystem(RunSummary& summary, const FlowFusionSystem& system, long summed_rounds);
+
 // Processes every frame of `source`. A frame that throws (also one the read-ahead failed to read)
 // ends the sinks with an incomplete summary (the frames before it kept) and is rethrown.
 // A live source (FrameSource::arrivals(): io/live_frame_queue.h, io/realtime_replay.h) is not read

@@ -6,7 +6,7 @@ namespace ff::report {
 
 ReportSink::ReportSink(ReportOptions options) : options_(std::move(options)) {}
 
-void ReportSink::end(RunSummary& summary, const FlowFusionSystem&) {
+void ReportSink::end(RunSummary& summary, const StaticMap*) {
   try {
     summary.written.push_back(writeReport(options_));
   } catch (const InputError& e) {

@@ -12,7 +12,7 @@ class ReportSink : public ResultSink {
   explicit ReportSink(ReportOptions options);
   // Writes the report and adds it to summary.written; a report that cannot be written becomes a
   // note (the run's own files are complete by then).
-  void end(RunSummary& summary, const FlowFusionSystem& system) override;
+  void end(RunSummary& summary, const StaticMap* map) override;
 
  private:
   ReportOptions options_;

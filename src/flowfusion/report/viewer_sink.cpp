@@ -95,7 +95,7 @@ void ViewerSink::frame(const RgbdFrame& frame, const FrameResult& result) {
   ++shown_;
 }
 
-void ViewerSink::end(RunSummary& summary, const FlowFusionSystem&) {
+void ViewerSink::end(RunSummary& summary, const StaticMap*) {
   if (!has_display_) {
     summary.notes.push_back("--show: no display (DISPLAY and WAYLAND_DISPLAY are unset), nothing shown");
     return;
