@@ -13,7 +13,7 @@
 #include "convert.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/core/undistortion.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "sequence.h"
 

@@ -9,7 +9,7 @@
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/tum_folder_source.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
 #include "synth_source.h"

@@ -120,7 +120,7 @@ cv::Mat decodeCompressed(const RosImage& m, const std::string& name, const Camer
 }
 
 // InputError unless the options' depth scale is usable, before anything is read.
-void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag_depth_scale, "--depth-scale"); }
+void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag.depth_scale, "--depth-scale"); }
 
 }  // namespace
 
@@ -207,8 +207,8 @@ std::string BagReader::Impl::chooseTopic(const std::string& given, const std::ve
 
 void BagReader::Impl::pickTopics() {
   topics = recording->topics();
-  color_topic = chooseTopic(options.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
-  depth_topic = chooseTopic(options.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
+  color_topic = chooseTopic(options.bag.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
+  depth_topic = chooseTopic(options.bag.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
   if (color_topic == depth_topic) fail("colour and depth topics are the same (" + color_topic + ")");
   color_type = typeOf(color_topic);
   depth_type = typeOf(depth_topic);
@@ -297,7 +297,7 @@ cv::Mat BagReader::Impl::decodeDepth(const RosImage& m, const std::string& name,
     throw InputError(name + ": " + encodingProblem(true, e, Kind::kDepth));
   } else if (e == "16uc1" || e == "mono16") {
     depth = wrapImage(m, CV_16UC1, name);
-    scale = options.bag_depth_scale;
+    scale = options.bag.depth_scale;
   } else if (e == "32fc1") {
     depth = wrapImage(m, CV_32FC1, name);
     // No measurement is 0 in every stage; ROS drivers write NaN (and some +-inf or negatives).

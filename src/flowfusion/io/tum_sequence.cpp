@@ -72,7 +72,7 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
   TumSequence s;
   s.dir_ = dir;
   s.options_ = options;
-  checkDepthScale(options.depth_scale, "--depth-scale");
+  checkDepthScale(options.tum.depth_scale, "--depth-scale");
 
   const fs::path root(dir);
   if (!options.camera.empty()) {
@@ -136,7 +136,7 @@ RgbdFrame TumSequence::load(size_t i) const {
     color = undistorter_->undistortColor(color);
     depth = undistorter_->undistortDepth(depth);
   }
-  RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
+  RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.tum.depth_scale, e.rgb_path);
   frame.depth_timestamp = e.depth_timestamp;
   return frame;
 }

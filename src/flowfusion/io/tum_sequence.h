@@ -12,23 +12,10 @@
 #include "flowfusion/core/output_folder.h"  // prepareOutputDir, for the writers of sequences
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/undistortion.h"
+#include "flowfusion/io/sequence_options.h"
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff {
-
-struct SequenceOptions {
-  double depth_scale = 5000.0;     // raw depth units per metre (TUM: 5000)
-  double max_time_diff = 0.02;     // s, colour-depth association limit (as the benchmark's associate.py)
-  std::string camera;              // "", "fr1|fr2|fr3" or "fx,fy,cx,cy[...]": overrides detection
-  // Undistort frames as they are loaded when the camera has lens distortion (fr1, fr2 or
-  // coefficients in the spec or camera.txt); false feeds the raw images to the pinhole model.
-  bool undistort = true;
-  // ROS bags (io/bag_source.h): the colour and depth topics ("" = found by name), raw 16UC1 depth
-  // units per metre (ROS drivers: millimetres) and a TUM groundtruth.txt for the recording ("" = none).
-  std::string rgb_topic, depth_topic;
-  double bag_depth_scale = 1000.0;
-  std::string groundtruth;
-};
 
 // Raw 16-bit depth units per metre within what a depth sensor's images can mean (100: centimetres,
 // 1000: millimetres, 5000: TUM, up to 65535, one metre at the 16-bit limit); InputError naming

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "flowfusion/core/timings.h"
-#include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/core/process_memory.h"
 #include "flowfusion/io/prefetching_source.h"
 
 namespace ff {
@@ -54,7 +54,7 @@ void summariseSystem(RunSummary& s, const FlowFusionSystem& system, long summed_
     s.map_surfels = map->size();
     s.map_budget_reached = map->budgetReached();
   }
-  s.peak_memory_mib = eval::peakResidentMiB();
+  s.peak_memory_mib = peakResidentMiB();
 }
 
 namespace {

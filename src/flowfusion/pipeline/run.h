@@ -1,6 +1,6 @@
 #pragma once
 // A run: frames from a source, through the system, to the sinks (`flowfusion run`, `bench`, the
-// Python package). The loop knows nothing of files; FilesSink (pipeline/files_sink.h) writes them.
+// Python package). The loop knows nothing of files; FilesSink (sinks/files_sink.h) writes them.
 #include <atomic>
 #include <vector>
 

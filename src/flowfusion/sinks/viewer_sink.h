@@ -11,7 +11,7 @@
 
 #include "flowfusion/pipeline/result_sink.h"
 
-namespace ff::report {
+namespace ff {
 
 struct ViewerOptions {
   std::string window = "flowfusion";
@@ -44,4 +44,4 @@ class ViewerSink : public ResultSink {
 // Whether a window can be opened here (DISPLAY or WAYLAND_DISPLAY set).
 bool displayAvailable();
 
-}  // namespace ff::report
+}  // namespace ff

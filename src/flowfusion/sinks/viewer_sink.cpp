@@ -1,4 +1,4 @@
-#include "flowfusion/report/viewer_sink.h"
+#include "flowfusion/sinks/viewer_sink.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -7,7 +7,7 @@
 
 #include "flowfusion/visualization/overlay.h"
 
-namespace ff::report {
+namespace ff {
 namespace {
 
 cv::Mat fitHeight(const cv::Mat& bgr, int height) {
@@ -105,4 +105,4 @@ void ViewerSink::end(RunSummary& summary, const StaticMap*) {
   open_ = false;
 }
 
-}  // namespace ff::report
+}  // namespace ff

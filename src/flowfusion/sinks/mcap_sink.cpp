@@ -1,4 +1,4 @@
-#include "flowfusion/pipeline/mcap_sink.h"
+#include "flowfusion/sinks/mcap_sink.h"
 
 #include <cmath>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 
 #include <chrono>
 #include <condition_variable>
