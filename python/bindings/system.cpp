@@ -183,9 +183,8 @@ py::dict timings(const PySystem& s) {
   return out;
 }
 
-}  // namespace
-
-void bindSystem(py::module_& m) {
+// ff.Result: what System.process returns.
+void bindResult(py::module_& m) {
   py::class_<FrameResult>(m, "Result", "What System.process returns for one frame.")
       .def_readonly("timestamp", &FrameResult::timestamp, "Seconds.")
       .def_property_readonly("T_world_cam", [](const FrameResult& r) { return arrayFromPose(r.T_world_cam); },
@@ -209,7 +208,12 @@ void bindSystem(py::module_& m) {
       .def_readonly("restarted_from_flow", &FrameResult::restarted_from_flow,
                     "The odometry restarted from the flow's rigid consensus.")
       .def_readonly("iterations", &FrameResult::iterations, "Segmentation rounds.");
+}
 
+}  // namespace
+
+void bindSystem(py::module_& m) {
+  bindResult(m);
   py::class_<PySystem>(m, "System",
                        "The FlowFusion system: feed frames in time order with process(); it tracks the camera, "
                        "segments moving objects and maps the static scene.")
