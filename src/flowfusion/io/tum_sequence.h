@@ -3,6 +3,7 @@
 // lines, '#' comments), rgb/ and depth/ PNGs, optional groundtruth.txt, and optionally a
 // camera.txt with the intrinsics and masks/<timestamp>.png with ground-truth dynamic masks
 // (both written by `flowfusion synth` and `flowfusion augment`).
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -76,8 +77,10 @@ void writeCameraFile(const std::string& path, const CameraIntrinsics& camera);
 class TumWriter {
  public:
   TumWriter(std::string dir, const CameraIntrinsics& camera, double depth_scale = 5000.0);
+  // depth_timestamp: when the depth was taken, listed in depth.txt (NaN: with the colour, at
+  // `timestamp`); the files are named after `timestamp` either way.
   void add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_m, const SE3& T_world_cam,
-           const cv::Mat& mask = {});
+           const cv::Mat& mask = {}, double depth_timestamp = std::numeric_limits<double>::quiet_NaN());
   // Writes rgb.txt, depth.txt, groundtruth.txt and camera.txt.
   void finish(const std::string& source_comment);
 

@@ -33,6 +33,10 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
   if (!(c.target_mover_margin_px >= 0 && c.target_mover_margin_px <= 16))
     throw InputError("scores.target_mover_margin_px must be in [0, 16] pixels (0 turns the margin off)");
+  if (!(c.depth_offset_ms >= 0 && c.depth_offset_ms <= 100))
+    throw InputError("scores.depth_offset_ms must be in [0, 100] milliseconds (0: the stamps alone)");
+  if (!(c.depth_window_px >= 0 && c.depth_window_px <= 8))
+    throw InputError("scores.depth_window_px must be in [0, 8] pixels (0 compares the depth where a pixel lands)");
   if (!(c.flow_error_px >= 0 && std::isfinite(c.flow_error_px)))
     throw InputError("scores.flow_error_px must be a finite number of pixels >= 0 (0 turns the scaling off)");
 }

@@ -80,6 +80,15 @@ struct ScoreConfig {
   // that mask, would show the depth of the map behind it as motion and keep it dynamic
   // (docs/tuning.md#target_mover_margin_px).
   int target_mover_margin_px = 1;
+  // Milliseconds (our extension): how far apart the depth may be taken from the colour beyond
+  // what their stamps say (RgbdFrame::depth_timestamp; a rolling shutter, stamps of arrival). Real
+  // depth is out of step with colour under fast rotation (fr1/rpy: stamps up to 11 ms apart; a thin
+  // desk edge 2 m away lands a few pixels off over the far background, a metre of depth residual
+  // that the memory then keeps), so r_D is the smallest depth difference within the pixels the
+  // camera's image motion covers in that time (depthOffsetPx), at most depth_window_px at the
+  // segmentation level (0 = off; docs/tuning.md#depth_offset_ms).
+  double depth_offset_ms = 2.0;
+  int depth_window_px = 4;
   // Pixels of the VGA image (our extension; 0 = off): when the median flow residual over the frame
   // exceeds this, the flow failed on the frame as a whole (real motion blur, a large rotation the
   // flow did not follow), and r_F is scaled by this over the median (relativeToFrameError), so only
@@ -90,7 +99,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 body_smoothing, body_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
-                                                target_mover_share, target_mover_margin_px, flow_error_px)
+                                                target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
+                                                flow_error_px)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 

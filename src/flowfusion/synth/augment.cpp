@@ -182,7 +182,8 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
     const double t = real.timestamp;
     opt.noise_key = hashCombine(hashCombine(config.seed, kAugmentNoise), static_cast<uint64_t>(std::llround(t * 1e6)));
     const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt);
-    writer.add(t, c.color, c.depth, T_world_cam, c.mask);
+    // The real depth keeps its own time: out of step with the colour, as the sensor took it.
+    writer.add(t, c.color, c.depth, T_world_cam, c.mask, real.depth_timestamp);
   }
   writer.finish("flowfusion augment of " + static_dir + ", seed " + std::to_string(config.seed) +
                 ", generator version " + std::to_string(kGeneratorVersion));
