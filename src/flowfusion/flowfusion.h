@@ -15,7 +15,7 @@
 #include "flowfusion/io/trajectory_io.h"
 #include "flowfusion/io/tum_folder_source.h"
 #include "flowfusion/io/tum_sequence.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
 #include "flowfusion/pipeline/result_sink.h"
 #include "flowfusion/pipeline/run.h"

@@ -26,7 +26,7 @@ std::string lower(std::string s) {
 bool isImage(RosType t) { return t == RosType::kImage || t == RosType::kCompressedImage; }
 
 // InputError unless the options' depth scale is usable, before anything is read.
-void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag_depth_scale, "--depth-scale"); }
+void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag.depth_scale, "--depth-scale"); }
 
 }  // namespace
 
@@ -111,8 +111,8 @@ std::string BagReader::Impl::chooseTopic(const std::string& given, const std::ve
 
 void BagReader::Impl::pickTopics() {
   topics = recording->topics();
-  color_topic = chooseTopic(options.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
-  depth_topic = chooseTopic(options.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
+  color_topic = chooseTopic(options.bag.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
+  depth_topic = chooseTopic(options.bag.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
   if (color_topic == depth_topic) fail("colour and depth topics are the same (" + color_topic + ")");
   color_type = typeOf(color_topic);
   depth_type = typeOf(depth_topic);
@@ -205,7 +205,7 @@ BagFrame BagReader::read(size_t i) {
   f.name = d.path + ":" + d.color_topic + "#" + std::to_string(ci);
   const std::string depth_name = d.path + ":" + d.depth_topic + "#" + std::to_string(di);
   f.bgr8 = decodeRosColor(d.recording->image(0, ci), f.name, d.camera.intrinsics);
-  f.depth = decodeRosDepth(d.recording->image(1, di), depth_name, d.camera.intrinsics, d.options.bag_depth_scale,
+  f.depth = decodeRosDepth(d.recording->image(1, di), depth_name, d.camera.intrinsics, d.options.bag.depth_scale,
                            f.depth_scale);
   return f;
 }

@@ -24,7 +24,7 @@ namespace ff {
 
 class BagReader {
  public:
-  // Opens the bag, picks the topics (options.rgb_topic/depth_topic, else the known names, else
+  // Opens the bag, picks the topics (options.bag.rgb_topic/depth_topic, else the known names, else
   // the only image topic with / without "depth" in its name), reads the camera (options.camera,
   // else a TUM bag's name rgbd_dataset_freiburgN_*, else CameraInfo beside the colour topic or
   // the bag's only CameraInfo topic) and associates the stamps. Throws InputError naming the bag

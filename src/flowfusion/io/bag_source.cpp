@@ -14,7 +14,7 @@ BagSource::BagSource(const std::string& path, const SequenceOptions& options, Fr
                      " is outside the bag's " + std::to_string(n) + " associated frames");
   const CameraModel& camera = reader_.camera();
   if (options.undistort && !camera.distortion.none()) undistorter_.emplace(camera.intrinsics, camera.distortion);
-  if (!options.groundtruth.empty()) groundtruth_ = readTrajectory(options.groundtruth);
+  if (!options.bag.groundtruth.empty()) groundtruth_ = readTrajectory(options.bag.groundtruth);
 }
 
 std::optional<RgbdFrame> BagSource::next() {

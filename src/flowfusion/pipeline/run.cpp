@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "flowfusion/core/timings.h"
-#include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/core/process_memory.h"
 #include "flowfusion/io/prefetching_source.h"
 
 namespace ff {
@@ -43,7 +43,8 @@ nlohmann::json toJson(const RunSummary& summary) {
   return j;
 }
 
-void summariseSystem(RunSummary& s, const FlowFusionSystem& system) {
+void summariseSystem(RunSummary& s, const FlowFusionSystem& system, long summed_rounds) {
+  if (s.frames > 0) s.mean_rounds = static_cast<double>(summed_rounds) / static_cast<double>(s.frames);
   s.trajectory = system.trajectory();
   s.tracking_failures = system.trackingFailures();
   s.flow_restarts = system.flowRestarts();
@@ -53,7 +54,7 @@ void summariseSystem(RunSummary& s, const FlowFusionSystem& system) {
     s.map_surfels = map->size();
     s.map_budget_reached = map->budgetReached();
   }
-  s.peak_memory_mib = eval::peakResidentMiB();
+  s.peak_memory_mib = peakResidentMiB();
 }
 
 namespace {
@@ -111,19 +112,20 @@ class LiveMeter {
   LiveFigures figures_;
 };
 
-void summarise(RunSummary& s, const FlowFusionSystem& system, const std::vector<double>& load_ms,
+// The summary of runSequence's loop: the system's figures, the read time and a live run's figures.
+void summarise(RunSummary& s, const FlowFusionSystem& system, long summed_rounds, const std::vector<double>& load_ms,
                std::optional<LiveMeter>& live) {
   if (live) {
     live->finish();
     s.live = live->figures();
   }
-  if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
+  summariseSystem(s, system, summed_rounds);
   s.load_ms_median = median(load_ms);
-  summariseSystem(s, system);
 }
 
 void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFusionSystem& system) {
-  for (ResultSink* sink : sinks) sink->end(s, system);
+  const StaticMap* map = system.map();
+  for (ResultSink* sink : sinks) sink->end(s, map);
 }
 
 }  // namespace
@@ -142,6 +144,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
   std::vector<double> load_ms;
   std::unique_ptr<FlowFusionSystem> system;
   RunSummary summary;
+  long summed_rounds = 0;  // FrameResult::iterations over the frames
   try {
     for (std::optional<RgbdFrame> frame = nextFrame(frames, load_ms); frame; frame = nextFrame(frames, load_ms)) {
       if (control.stop && control.stop->load()) {
@@ -156,14 +159,14 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       if (live) live->processed();
       for (ResultSink* sink : sinks) sink->frame(*frame, r);
       ++summary.frames;
-      summary.mean_rounds += r.iterations;
+      summed_rounds += r.iterations;
       if (control.after_frame) control.after_frame(*system);
     }
   } catch (const std::exception& e) {
     summary.complete = false;
     summary.stop_reason = e.what();
     if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-    summarise(summary, *system, load_ms, live);
+    summarise(summary, *system, summed_rounds, load_ms, live);
     try {
       endSinks(sinks, summary, *system);
     } catch (const std::exception&) {
@@ -172,7 +175,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
     throw;
   }
   if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-  summarise(summary, *system, load_ms, live);
+  summarise(summary, *system, summed_rounds, load_ms, live);
   endSinks(sinks, summary, *system);
   return summary;
 }

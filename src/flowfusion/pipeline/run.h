@@ -1,6 +1,6 @@
 #pragma once
 // A run: frames from a source, through the system, to the sinks (`flowfusion run`, `bench`, the
-// Python package). The loop knows nothing of files; FilesSink (pipeline/files_sink.h) writes them.
+// Python package). The loop knows nothing of files; FilesSink (sinks/files_sink.h) writes them.
 #include <atomic>
 #include <functional>
 #include <vector>
@@ -27,9 +27,11 @@ struct RunControl {
 // The ground truth's pose at `timestamp` (s) when the source has one, else identity.
 SE3 initialPose(const FrameSource& source, double timestamp);
 
-// The summary's figures the system holds: trajectory, tracking failures, flow restarts, median frame
-// time, stage timings, map size and budget, peak memory (a run's files written before it ended).
-void summariseSystem(RunSummary& summary, const FlowFusionSystem& system);
+// What a run's summary takes from the system after its last frame, for runSequence and for any
+// loop of its own (the Python System's save()): trajectory, tracking failures, flow restarts,
+// per-stage timings, process()'s median wall time, the map's size, the peak memory, and
+// mean_rounds from summed_rounds (FrameResult::iterations summed over summary.frames frames).
+void summariseSystem(RunSummary& summary, const FlowFusionSystem& system, long summed_rounds);
 
 // Processes every frame of `source`. A frame that throws (also one the read-ahead failed to read)
 // ends the sinks with an incomplete summary (the frames before it kept) and is rethrown.

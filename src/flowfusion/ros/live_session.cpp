@@ -8,7 +8,7 @@
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/core/output_folder.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 
 namespace ff::rosnode {
@@ -78,12 +78,12 @@ class LiveSession::KeptRun : public ResultSink {
     masks_.push_back({frame.timestamp, std::move(png)});
     rounds_ += result.iterations;
   }
-  void end(RunSummary& summary, const FlowFusionSystem& system) override {
+  void end(RunSummary& summary, const StaticMap* map) override {
     if (!save_at_end_) return;
     // On stderr: ROS's logging has shut down with the node.
     try {
       RunSummary partial = summary;
-      std::fprintf(stderr, "flowfusion: %s\n", write(partial, system).c_str());
+      std::fprintf(stderr, "flowfusion: %s\n", write(partial, map).c_str());
     } catch (const std::exception& e) {
       std::fprintf(stderr, "flowfusion: error: writing the partial result failed: %s\n", e.what());
     }
@@ -93,11 +93,10 @@ class LiveSession::KeptRun : public ResultSink {
   RunSummary summarySoFar(const FlowFusionSystem& system) const {
     RunSummary s;
     s.frames = masks_.size();
-    s.mean_rounds = masks_.empty() ? 0 : double(rounds_) / double(masks_.size());
-    summariseSystem(s, system);
+    summariseSystem(s, system, rounds_);
     return s;
   }
-  std::string write(RunSummary& summary, const FlowFusionSystem& system) {
+  std::string write(RunSummary& summary, const StaticMap* map) {
     FilesSinkOptions options;
     options.out_dir = dir_;
     options.overwrite = true;  // the node's own earlier saves (the folder's manifest)
@@ -106,14 +105,8 @@ class LiveSession::KeptRun : public ResultSink {
       ~Release() { releaseOutputDir(); }
     } release;
     files.begin(info_);
-    for (const auto& [timestamp, png] : masks_) {
-      RgbdFrame frame;
-      frame.timestamp = timestamp;
-      FrameResult result;
-      result.dynamic_mask = cv::imdecode(png, cv::IMREAD_GRAYSCALE);
-      files.frame(frame, result);
-    }
-    files.end(summary, system);
+    for (const auto& [timestamp, png] : masks_) files.writeMask(timestamp, cv::imdecode(png, cv::IMREAD_GRAYSCALE));
+    files.end(summary, map);
     return "wrote " + std::to_string(summary.frames) + " frames into " + dir_ +
            (summary.complete ? "" : " (partial: " + summary.stop_reason + ")");
   }
@@ -170,7 +163,7 @@ std::string LiveSession::save() {
   summary.live = publisher_.figures();
   summary.notes.push_back("a snapshot of a live run (flowfusion ros, ~save) after " + std::to_string(summary.frames) +
                           " frames; the node went on");
-  return kept_->write(summary, *system_);
+  return kept_->write(summary, system_->map());
 }
 
 void LiveSession::stop(const std::string& reason, bool save_partial) {
