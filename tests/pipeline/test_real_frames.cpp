@@ -50,26 +50,31 @@ double meanOf(const std::vector<double>& v, int first, int last) {
   return sum / (last - first + 1);
 }
 
-TEST(RealFrames, SurfacesComingIntoViewOfStaticFr1RpyAreNotKeptDynamicByTheDepthAlone) {
+// Frames first..last of static fr1/rpy: on average at most `fixed` of the pixels marked with the
+// defaults, and more than `cause` with `undo` applied to them (the cause the default fixes).
+void expectFixedOnFr1Rpy(int first, int last, double fixed, double cause, void (*undo)(SystemConfig&),
+                         const char* why) {
   const auto dir = testing::sharedTum("fr1_rpy_head150");
   if (!dir) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence seq = TumSequence::open(*dir);
   SystemConfig config;
+  EXPECT_LT(meanOf(markedShares(seq, config, last), first, last), fixed)
+      << "frames " << first << "-" << last << " of static fr1/rpy";
+  undo(config);
+  EXPECT_GT(meanOf(markedShares(seq, config, last), first, last), cause) << "the cause: " << why;
+}
+
+TEST(RealFrames, SurfacesComingIntoViewOfStaticFr1RpyAreNotKeptDynamicByTheDepthAlone) {
   // Frames 82-107 (2.7-3.5 s): 3.4 % marked on average with any term starting the motion, 0.2 % now.
-  EXPECT_LT(meanOf(markedShares(seq, config, 107), 82, 107), 0.01) << "frames 82-107 of static fr1/rpy";
-  config.scores.model_motion_cue = ModelMotionCue::kAnyTerm;
-  EXPECT_GT(meanOf(markedShares(seq, config, 107), 82, 107), 0.02) << "the cause: the depth cues confirm each other";
+  expectFixedOnFr1Rpy(
+      82, 107, 0.01, 0.02, [](SystemConfig& c) { c.scores.model_motion_cue = ModelMotionCue::kAnyTerm; },
+      "the depth cues confirm each other");
 }
 
 TEST(RealFrames, ThinStructuresOfStaticFr1RpyAreNotMovedByADepthOutOfStepWithTheColour) {
-  const auto dir = testing::sharedTum("fr1_rpy_head150");
-  if (!dir) GTEST_SKIP() << testing::sharedDataMissing();
-  const TumSequence seq = TumSequence::open(*dir);
-  SystemConfig config;
   // Frames 27-69 (0.9-2.3 s): 0.3 % marked on average with the depth window, 4.4 % without it.
-  EXPECT_LT(meanOf(markedShares(seq, config, 69), 27, 69), 0.01) << "frames 27-69 of static fr1/rpy";
-  config.scores.depth_window_px = 0;
-  EXPECT_GT(meanOf(markedShares(seq, config, 69), 27, 69), 0.03) << "the cause: desk edges a few pixels off";
+  expectFixedOnFr1Rpy(
+      27, 69, 0.01, 0.03, [](SystemConfig& c) { c.scores.depth_window_px = 0; }, "desk edges a few pixels off");
 }
 
 }  // namespace
