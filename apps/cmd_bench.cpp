@@ -9,13 +9,14 @@
 
 #include "command.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/process_memory.h"
 #include "flowfusion/core/timings.h"
 #include "flowfusion/eval/bench_utils.h"
 #include "flowfusion/eval/reference_odometry.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/io/tum_folder_source.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "sequence_options.h"
 
@@ -92,7 +93,7 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
     row.precision = seg.mean_precision;
     row.recall = seg.mean_recall;
   }
-  row.peak_mib = eval::peakResidentMiB();
+  row.peak_mib = peakResidentMiB();
   return row;
 }
 
@@ -116,7 +117,7 @@ Row runReference(const TumSequence& seq, const std::string& label, eval::Referen
   if (!run.trajectory.empty()) row.end_to_end_ms = wall_ms / static_cast<double>(run.trajectory.size());
   row.stage_ms.assign(kStages.size(), NAN);
   row.stage_ms[0] = run.median_ms;
-  row.peak_mib = eval::peakResidentMiB();
+  row.peak_mib = peakResidentMiB();
   return row;
 }
 

@@ -18,7 +18,7 @@ struct Options {
 
 void convert(const Options& o) {
   ff::refuseOverlap(o.out, o.bag, "the input bag");
-  if (!o.sequence.groundtruth.empty()) ff::refuseOverlap(o.out, o.sequence.groundtruth, "the --groundtruth file");
+  if (!o.sequence.bag.groundtruth.empty()) ff::refuseOverlap(o.out, o.sequence.bag.groundtruth, "the --groundtruth file");
   ff::setOutputCommand("convert");
   const ff::app::StopSignals signals;
   const ff::BagConversion c =
@@ -41,14 +41,14 @@ const ff::app::RegisterCommand convert_command("55-convert", [](CLI::App& app) {
                  "depth.txt, camera.txt, summary.json)");
   cmd->add_option("BAG", o->bag, "ROS 1 bag (.bag) or ROS 2 bag (rosbag2 folder, .mcap, .db3) with colour and depth image topics")->required();
   cmd->add_option("OUT", o->out, "Output folder")->required();
-  cmd->add_option("--rgb-topic", o->sequence.rgb_topic, "Colour topic (default: found by name)");
-  cmd->add_option("--depth-topic", o->sequence.depth_topic, "Depth topic (default: found by name)");
-  cmd->add_option("--depth-scale", o->sequence.bag_depth_scale,
+  cmd->add_option("--rgb-topic", o->sequence.bag.rgb_topic, "Colour topic (default: found by name)");
+  cmd->add_option("--depth-topic", o->sequence.bag.depth_topic, "Depth topic (default: found by name)");
+  cmd->add_option("--depth-scale", o->sequence.bag.depth_scale,
                   "Raw 16UC1 depth units per metre in the bag, 100 to 65535")
       ->capture_default_str();
   cmd->add_option("--camera", o->sequence.camera,
                   "Intrinsics: fr1|fr2|fr3|fx,fy,cx,cy[,width,height[,k1,k2,p1,p2,k3]] (default: CameraInfo)");
-  cmd->add_option("--groundtruth", o->sequence.groundtruth, "TUM groundtruth.txt to copy into the folder");
+  cmd->add_option("--groundtruth", o->sequence.bag.groundtruth, "TUM groundtruth.txt to copy into the folder");
   cmd->add_flag("--overwrite", o->overwrite, "Write into a non-empty output folder");
   cmd->callback([o] { convert(*o); });
 });

@@ -17,7 +17,7 @@
 #include "flowfusion/io/frame_source.h"
 #include "flowfusion/io/trajectory_io.h"
 #include "flowfusion/io/tum_sequence.h"
-#include "flowfusion/pipeline/mcap_sink.h"
+#include "flowfusion/sinks/mcap_sink.h"
 
 namespace fs = std::filesystem;
 
@@ -69,7 +69,7 @@ void convertResults(const Options& o) {
   const ff::Trajectory trajectory = ff::readTrajectory((run / "trajectory.txt").string());
   ff::SequenceOptions options = o.source;
   options.undistort = false;  // masks/ holds the raw pixels
-  if (o.depth_scale > 0) options.depth_scale = options.bag_depth_scale = o.depth_scale;
+  if (o.depth_scale > 0) options.tum.depth_scale = options.bag.depth_scale = o.depth_scale;
   const std::unique_ptr<ff::FrameSource> source = ff::openFrameSource(sequence, options);
   ff::McapSink sink(o.out);
   ff::RunInfo info;
@@ -105,8 +105,8 @@ const ff::app::RegisterCommand convert_results_command("56-convert-results", [](
   cmd->add_option("--sequence", o->sequence, "The run's sequence (default: summary.json's)");
   cmd->add_option("--camera", o->source.camera, "Intrinsics as given to the run");
   cmd->add_option("--depth-scale", o->depth_scale, "Raw depth units per metre, as given to the run");
-  cmd->add_option("--rgb-topic", o->source.rgb_topic, "Bags: colour topic, as given to the run");
-  cmd->add_option("--depth-topic", o->source.depth_topic, "Bags: depth topic, as given to the run");
+  cmd->add_option("--rgb-topic", o->source.bag.rgb_topic, "Bags: colour topic, as given to the run");
+  cmd->add_option("--depth-topic", o->source.bag.depth_topic, "Bags: depth topic, as given to the run");
   cmd->callback([o] { convertResults(*o); });
 });
 

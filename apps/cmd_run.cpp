@@ -16,12 +16,12 @@
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/io/realtime_replay.h"
-#include "flowfusion/pipeline/files_sink.h"
-#include "flowfusion/pipeline/mcap_sink.h"
+#include "flowfusion/sinks/files_sink.h"
+#include "flowfusion/sinks/mcap_sink.h"
 #include "flowfusion/pipeline/run.h"
-#include "flowfusion/pipeline/tracked_trajectory_sink.h"
-#include "flowfusion/report/report_sink.h"
-#include "flowfusion/report/viewer_sink.h"
+#include "flowfusion/sinks/report_sink.h"
+#include "flowfusion/sinks/tracked_trajectory_sink.h"
+#include "flowfusion/sinks/viewer_sink.h"
 #include "sequence_options.h"
 #include "stop_signals.h"
 
@@ -54,7 +54,7 @@ class ProgressSink : public ResultSink {
     else
       std::fprintf(stderr, "\rframe %zu/%zu", done_, total_);
   }
-  void end(RunSummary&, const FlowFusionSystem&) override { std::fprintf(stderr, "\n"); }
+  void end(RunSummary&, const StaticMap*) override { std::fprintf(stderr, "\n"); }
 
  private:
   size_t done_ = 0, total_ = 0;
@@ -121,12 +121,12 @@ void execute(const RunCommand& c) {
   TrackedTrajectorySink tracked(c.out);
   std::vector<ResultSink*> sinks = {&sink, &tracked};
   if (!c.quiet && isatty(fileno(stderr))) sinks.push_back(&progress);
-  report::ViewerSink viewer;
+  ViewerSink viewer;
   if (c.show) sinks.push_back(&viewer);
   report::ReportOptions report_options;
   report_options.run_dir = c.out;
   if (std::filesystem::is_directory(c.sequence)) report_options.sequence = c.sequence;
-  report::ReportSink report(report_options);
+  ReportSink report(report_options);
   if (c.report) sinks.push_back(&report);  // after the files sink, whose files it reads
   std::unique_ptr<McapSink> mcap;
   if (!c.mcap.empty()) {

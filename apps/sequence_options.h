@@ -45,11 +45,11 @@ struct SystemOptions {
   SequenceOptions sequenceOptions() const {
     SequenceOptions s;
     s.camera = camera;
-    s.depth_scale = depth_scale;
-    if (depth_scale_option && depth_scale_option->count() > 0) s.bag_depth_scale = depth_scale;
-    s.rgb_topic = rgb_topic;
-    s.depth_topic = depth_topic;
-    s.groundtruth = groundtruth;
+    s.tum.depth_scale = depth_scale;
+    if (depth_scale_option && depth_scale_option->count() > 0) s.bag.depth_scale = depth_scale;
+    s.bag.rgb_topic = rgb_topic;
+    s.bag.depth_topic = depth_topic;
+    s.bag.groundtruth = groundtruth;
     s.undistort = !no_undistort;
     return s;
   }

@@ -96,7 +96,7 @@ BENCHMARK(BM_ReadFolder)->Unit(benchmark::kMillisecond);
 void BM_ReadBag(benchmark::State& state, const char* compression) {
   const std::string path = recording().bag(compression);
   ff::SequenceOptions options;
-  options.bag_depth_scale = 5000;
+  options.bag.depth_scale = 5000;
   readAll(state, [&] { return std::make_unique<ff::BagSource>(path, options); });
 }
 BENCHMARK_CAPTURE(BM_ReadBag, none, "none")->Unit(benchmark::kMillisecond);

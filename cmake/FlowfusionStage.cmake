@@ -1,8 +1,19 @@
-# flowfusion_stage(NAME DEPS ... [PRIVATE_DEPS ...] [PRIVATE_INCLUDES ...] [PRIVATE_DEFINES ...]):
+# flowfusion_stage(NAME DEPS ... [PRIVATE_DEPS ...] [PRIVATE_INCLUDES ...] [PRIVATE_DEFINES ...]
+#                  [INTERNAL_HEADERS ...]):
 # a static library from every .cpp in src/flowfusion/NAME, installed and exported as
-# flowfusion::flowfusion_NAME.
+# flowfusion::flowfusion_NAME, with the folder's headers under include/flowfusion/NAME except the
+# INTERNAL_HEADERS (file names in the folder that only its own sources include; no installed
+# header may include one: tests/install checks it).
 function(flowfusion_stage name)
-  cmake_parse_arguments(ARG "" "" "DEPS;PRIVATE_DEPS;PRIVATE_INCLUDES;PRIVATE_DEFINES" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;PRIVATE_DEPS;PRIVATE_INCLUDES;PRIVATE_DEFINES;INTERNAL_HEADERS" ${ARGN})
+  file(GLOB _headers CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/*.h)
+  foreach(_internal ${ARG_INTERNAL_HEADERS})
+    if(NOT EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/${_internal})
+      message(FATAL_ERROR "flowfusion_stage(${name}): INTERNAL_HEADERS names ${_internal}, which is not in ${name}/")
+    endif()
+    list(REMOVE_ITEM _headers ${CMAKE_CURRENT_SOURCE_DIR}/${name}/${_internal})
+  endforeach()
+  install(FILES ${_headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/flowfusion/${name})
   file(GLOB _sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/*.cpp)
   if(_sources)
     add_library(flowfusion_${name} STATIC ${_sources})
@@ -22,9 +33,10 @@ function(flowfusion_stage name)
   install(TARGETS flowfusion_${name} EXPORT flowfusionTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endfunction()
 
-# flowfusion_test(STAGE DEPS ...): one GoogleTest executable from every .cpp in tests/STAGE.
+# flowfusion_test(STAGE DEPS ... [TEST_PROPERTIES ...]): one GoogleTest executable from every .cpp in
+# tests/STAGE; TEST_PROPERTIES are set on each of its tests (e.g. a fixture they need).
 function(flowfusion_test stage)
-  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;TEST_PROPERTIES" ${ARGN})
   file(GLOB _sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${stage}/*.cpp)
   if(NOT _sources)
     return()
@@ -32,5 +44,5 @@ function(flowfusion_test stage)
   add_executable(test_${stage} ${_sources})
   target_link_libraries(test_${stage} PRIVATE flowfusion_testing ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   gtest_discover_tests(test_${stage} DISCOVERY_TIMEOUT 60
-    PROPERTIES ENVIRONMENT "FLOWFUSION_SHARED_DATA=${FLOWFUSION_SHARED_DATA}")
+    PROPERTIES ENVIRONMENT "FLOWFUSION_SHARED_DATA=${FLOWFUSION_SHARED_DATA}" ${ARG_TEST_PROPERTIES})
 endfunction()

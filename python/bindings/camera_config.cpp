@@ -84,7 +84,7 @@ py::object getSetting(const SystemConfig& config, const std::string& key) {
 SequenceOptions sequenceOptions(const py::object& camera, double depth_scale, bool undistort) {
   SequenceOptions o;
   checkDepthScale(depth_scale, "depth_scale");
-  o.depth_scale = depth_scale;
+  o.tum.depth_scale = depth_scale;
   o.undistort = undistort;
   if (py::isinstance<CameraModel>(camera)) o.camera = cameraSpec(camera.cast<CameraModel>());
   else if (py::isinstance<py::str>(camera)) o.camera = camera.cast<std::string>();

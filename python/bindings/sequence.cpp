@@ -17,15 +17,8 @@ TumSequence openSequence(const std::string& path, const SequenceOptions& options
   return TumSequence::open(path, options);
 }
 
-}  // namespace
-
-PySequence::PySequence(const std::string& path, const SequenceOptions& options, FrameRange range)
-    : source_(std::make_unique<TumFolderSource>(openSequence(path, options), range)) {
-  first_ = static_cast<size_t>(range.first);
-  count_ = *source_->remaining();
-}
-
-void bindSequence(py::module_& m) {
+// ff.Frame: one frame of a sequence as NumPy arrays.
+void bindFrame(py::module_& m) {
   py::class_<PyFrame>(m, "Frame",
                       "One RGB-D frame as a sequence loads it (undistorted when its camera has distortion). "
                       "System.process(frame) is the form that matches `flowfusion run`.")
@@ -48,7 +41,18 @@ void bindSequence(py::module_& m) {
         return "flowfusion.Frame(" + std::to_string(f.frame.timestamp) + ", " + std::to_string(f.frame.width()) + "x" +
                std::to_string(f.frame.height()) + ")";
       });
+}
 
+}  // namespace
+
+PySequence::PySequence(const std::string& path, const SequenceOptions& options, FrameRange range)
+    : source_(std::make_unique<TumFolderSource>(openSequence(path, options), range)) {
+  first_ = static_cast<size_t>(range.first);
+  count_ = *source_->remaining();
+}
+
+void bindSequence(py::module_& m) {
+  bindFrame(m);
   py::class_<PySequence>(m, "TumSequence",
                          "A sequence in the TUM RGB-D layout (rgb.txt, depth.txt, rgb/, depth/, optional "
                          "groundtruth.txt, camera.txt, masks/). len(seq), seq[i] and `for f in seq` give ff.Frame "

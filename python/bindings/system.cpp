@@ -13,9 +13,9 @@
 #include "convert.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/core/undistortion.h"
-#include "flowfusion/eval/bench_utils.h"
-#include "flowfusion/pipeline/files_sink.h"
-#include "flowfusion/pipeline/tracked_trajectory_sink.h"
+#include "flowfusion/sinks/files_sink.h"
+#include "flowfusion/pipeline/run.h"
+#include "flowfusion/sinks/tracked_trajectory_sink.h"
 #include "sequence.h"
 
 namespace ff::py_bind {
@@ -75,19 +75,16 @@ class PySystem {
     const OutputRelease release;
     TrackedTrajectorySink tracked(out_dir);
     sink.begin({name, nullptr, system_.config(), system_.camera(), frames_});
-    for (const auto& kept : masks_) {
-      RgbdFrame frame;
-      frame.timestamp = kept.timestamp;
-      FrameResult result;
-      // A frame without its own mapping takes the sequence's (arrays cut from its frames).
-      result.dynamic_mask = kept.raw || !sequence ? inRawPixels(kept.raw, kept.mask)
-                                                  : sequence->source().toRawPixels(kept.mask);
-      sink.frame(frame, result);
-    }
+    // A frame without its own mapping takes the sequence's (arrays cut from its frames).
+    for (const auto& kept : masks_)
+      sink.writeMask(kept.timestamp, kept.raw || !sequence ? inRawPixels(kept.raw, kept.mask)
+                                                           : sequence->source().toRawPixels(kept.mask));
     system_.finishLoopClosure();  // the loop checks still running, as at the end of a run
-    RunSummary s = summary();
-    sink.end(s, system_);
-    tracked.end(s, system_);
+    RunSummary s;
+    s.frames = frames_;
+    summariseSystem(s, system_, rounds_);
+    sink.end(s, system_.map());
+    tracked.end(s, system_.map());
     return s.written;
   }
 
@@ -101,30 +98,6 @@ class PySystem {
     cv::Mat mask;  // the system's pixels
     RawPixels raw;
   };
-
-  RunSummary summary() const {
-    RunSummary s;
-    s.frames = frames_;
-    s.mean_rounds = frames_ ? static_cast<double>(rounds_) / static_cast<double>(frames_) : 0.0;
-    s.trajectory = system_.closedTrajectory();
-    s.tracked_trajectory = system_.trajectory();
-    s.loop_closure = system_.loopClosureActive();
-    s.loop_closures = system_.loopClosures();
-    s.loop_corrections = system_.loopCorrections();
-    s.slam_keyframes = system_.slamKeyframes();
-    s.lost_frames = system_.lostFrames();
-    s.relocalized_frames = system_.relocalizedFrames();
-    if (!system_.loopClosureNote().empty()) s.notes.push_back(system_.loopClosureNote());
-    s.tracking_failures = system_.trackingFailures();
-    s.flow_restarts = system_.flowRestarts();
-    s.timings = system_.timings();
-    if (const StaticMap* map = system_.map()) {
-      s.map_surfels = map->size();
-      s.map_budget_reached = map->budgetReached();
-    }
-    s.peak_memory_mib = eval::peakResidentMiB();
-    return s;
-  }
 
   std::mutex mutex_;
   FlowFusionSystem system_;
@@ -214,9 +187,8 @@ py::dict timings(const PySystem& s) {
   return out;
 }
 
-}  // namespace
-
-void bindSystem(py::module_& m) {
+// ff.Result: what System.process returns.
+void bindResult(py::module_& m) {
   py::class_<FrameResult>(m, "Result", "What System.process returns for one frame.")
       .def_readonly("timestamp", &FrameResult::timestamp, "Seconds.")
       .def_property_readonly("T_world_cam", [](const FrameResult& r) { return arrayFromPose(r.T_world_cam); },
@@ -240,7 +212,12 @@ void bindSystem(py::module_& m) {
       .def_readonly("restarted_from_flow", &FrameResult::restarted_from_flow,
                     "The odometry restarted from the flow's rigid consensus.")
       .def_readonly("iterations", &FrameResult::iterations, "Segmentation rounds.");
+}
 
+}  // namespace
+
+void bindSystem(py::module_& m) {
+  bindResult(m);
   py::class_<PySystem>(m, "System",
                        "The FlowFusion system: feed frames in time order with process(); it tracks the camera, "
                        "segments moving objects and maps the static scene.")

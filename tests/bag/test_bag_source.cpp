@@ -171,8 +171,8 @@ void writeBag(const std::string& path, const BagSpec& spec) {
 // Options under which a bag of the folder's frames reads as the folder does.
 SequenceOptions bagOptions() {
   SequenceOptions o;
-  o.bag_depth_scale = kFolderDepthScale;
-  o.groundtruth = folder().groundtruth();
+  o.bag.depth_scale = kFolderDepthScale;
+  o.bag.groundtruth = folder().groundtruth();
   return o;
 }
 
@@ -261,7 +261,7 @@ TEST(BagSource, TopicsAndRangeAreHonoured) {
   EXPECT_EQ(bag.camera().fx, 100);
   EXPECT_EQ(bag.remaining(), 4u);
   EXPECT_EQ(bag.next()->timestamp, folder().entries[2].rgb_timestamp);
-  o.rgb_topic = "/cam/front/missing";
+  o.bag.rgb_topic = "/cam/front/missing";
   const std::string message = inputErrorOf([&] { BagSource bag(path, o); });
   EXPECT_NE(message.find("--rgb-topic /cam/front/missing"), std::string::npos) << message;
   EXPECT_NE(message.find("/cam/front/color (sensor_msgs/Image)"), std::string::npos) << message;

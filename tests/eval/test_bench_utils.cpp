@@ -7,15 +7,6 @@
 namespace ff::eval {
 namespace {
 
-TEST(PeakResident, GrowsWhenMemoryIsTouched) {
-  const double before = peakResidentMiB();
-  EXPECT_GT(before, 0);
-  std::vector<char> block(64 << 20, 1);  // 64 MiB, written so it is resident
-  volatile char sink = block[block.size() / 2];
-  (void)sink;
-  EXPECT_GE(peakResidentMiB(), before + 32);
-}
-
 TEST(TextTable, AlignsNumbersRightAndTextLeft) {
   TextTable t({"method", "ATE m"});
   t.addRow({"rgbd", TextTable::num(0.0325, 4)});

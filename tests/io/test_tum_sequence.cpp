@@ -98,7 +98,7 @@ TEST(TumSequence, DepthScaleOption) {
   testing::TempDir tmp;
   Folder f(tmp.path() / "seq");
   SequenceOptions o;
-  o.depth_scale = 1000;
+  o.tum.depth_scale = 1000;
   const RgbdFrame fr = TumSequence::open(f.str(), o).load(0);
   EXPECT_NEAR(fr.depth.at<float>(0, 0), 5.0f, 1e-6);
 }

@@ -321,6 +321,31 @@ TEST_F(DenseOdometryTest, PixelResidualsSkipWhereTheTargetIsWeightedOut) {
   EXPECT_EQ(cv::countNonZero(r.on_target_mover(right)), 0);
 }
 
+TEST(PixelResiduals, TheDepthWindowFindsADepthEdgeAFewPixelsAway) {
+  // A near surface (1 m) ends at column 40 of the target and 4 pixels later in the source, over a
+  // background at 3 m: the depth taken out of step with the colour under a fast rotation.
+  const CameraIntrinsics cam{300, 300, 40, 30, 80, 60};
+  OdometryConfig c;
+  c.finest_level = 0;
+  const cv::Mat intensity(60, 80, CV_32F, cv::Scalar(0.5f));
+  cv::Mat depth_target(60, 80, CV_32F, cv::Scalar(3.0f)), depth_source = depth_target.clone();
+  depth_target.colRange(0, 40).setTo(1.0f);
+  depth_source.colRange(0, 44).setTo(1.0f);
+  const OdometryFrame source = prepareOdometryFrame(intensity, depth_source, cam, c);
+  const OdometryFrame target = prepareOdometryFrame(intensity, depth_target, cam, c);
+  const auto rD = [&](int window, int x) {
+    return computePixelResiduals(source, target, SE3::Identity(), 0, c, {}, 0, window).abs_depth.at<float>(30, x);
+  };
+  for (const int x : {40, 41, 42, 43}) EXPECT_NEAR(rD(0, x), 2.0f, 1e-5) << "column " << x;
+  EXPECT_NEAR(rD(0, 20), 0.0f, 1e-6);
+  // The window spans the pixels around the 2x2 block the pixel lands in.
+  EXPECT_NEAR(rD(2, 40), 0.0f, 1e-6);
+  EXPECT_NEAR(rD(2, 41), 0.0f, 1e-6);
+  EXPECT_NEAR(rD(2, 42), 2.0f, 1e-5);
+  EXPECT_NEAR(rD(4, 43), 0.0f, 1e-6);
+  EXPECT_NEAR(rD(4, 60), 0.0f, 1e-6);  // the background matches the background
+}
+
 TEST_F(DenseOdometryTest, PixelResidualsWidenTheTargetsMoversByTheMargin) {
   const auto c = config();
   const SE3 T_world_ref = scene_->cameraPose(kRefFrame);

@@ -9,7 +9,7 @@
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/tum_folder_source.h"
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 #include "flowfusion/pipeline/run.h"
 #include "flowfusion/synth/synthetic_scene.h"
 #include "synth_source.h"
@@ -35,9 +35,10 @@ struct ProbeSink : ResultSink {
     EXPECT_EQ(r.timestamp, f.timestamp);
     if (stop && stamps.size() == stop_after) *stop = true;
   }
-  void end(RunSummary& s, const FlowFusionSystem& system) override {
+  void end(RunSummary& s, const StaticMap* map) override {
     calls.push_back(s.complete ? "end complete" : "end incomplete");
-    EXPECT_EQ(system.trajectory().size(), s.frames);
+    EXPECT_EQ(s.trajectory.size(), s.frames);
+    EXPECT_NE(map, nullptr);
   }
 };
 

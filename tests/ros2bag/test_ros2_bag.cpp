@@ -122,8 +122,8 @@ void writeDb3(const std::string& out, const std::string& args = "") {
 // gives the first pose).
 SequenceOptions bagOptions() {
   SequenceOptions o;
-  o.bag_depth_scale = kFolderDepthScale;
-  o.groundtruth = fixture().dir + "/groundtruth.txt";
+  o.bag.depth_scale = kFolderDepthScale;
+  o.bag.groundtruth = fixture().dir + "/groundtruth.txt";
   return o;
 }
 

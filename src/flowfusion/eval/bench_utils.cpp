@@ -1,7 +1,5 @@
 #include "flowfusion/eval/bench_utils.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,13 +23,6 @@ bool looksNumeric(const std::string& s) {
   return end && *end == '\0';
 }
 }  // namespace
-
-double peakResidentMiB() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  // Linux reports ru_maxrss in KiB.
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
 
 TextTable::TextTable(std::vector<std::string> headers) : headers_(std::move(headers)) {}
 

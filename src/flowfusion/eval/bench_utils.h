@@ -1,15 +1,12 @@
 #pragma once
-// Small helpers shared by `flowfusion bench` and `flowfusion eval`: peak memory and a plain-text
-// table (statistics and stage timings are in core/timings.h).
+// A plain-text table shared by `flowfusion bench` and `flowfusion eval` (statistics and stage
+// timings are in core/timings.h, the peak memory in core/process_memory.h).
 #include <string>
 #include <vector>
 
 #include "flowfusion/core/timings.h"
 
 namespace ff::eval {
-
-// Peak resident set size of this process so far (getrusage ru_maxrss), MiB.
-double peakResidentMiB();
 
 // Fixed-width text table: one header row, a rule, then the rows. Cells that read as numbers are
 // right-aligned, other cells left-aligned, headers of all-numeric columns right-aligned; columns

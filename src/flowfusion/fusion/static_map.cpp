@@ -188,6 +188,339 @@ std::vector<float> averagedDepth(const std::vector<Surfel>& surfels, const std::
 
 enum class Action : uint8_t { kNone, kMerge, kAdd, kDynamic };
 
+// Throws InputError naming the frame when its images or the camera do not fit integrate().
+void checkFusionInput(const RgbdFrame& frame, const CameraIntrinsics& camera, const cv::Mat& static_weight) {
+  const std::string what = "fusion input '" + frame.name + "'";
+  if (!camera.valid()) throw InputError(what + ": invalid camera intrinsics");
+  if (frame.depth.empty() || frame.depth.type() != CV_32FC1) throw InputError(what + ": depth must be CV_32FC1");
+  if (frame.depth.cols != camera.width || frame.depth.rows != camera.height)
+    throw InputError(what + ": depth is " + std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
+                     " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (frame.color.type() != CV_8UC3 || frame.color.size() != frame.depth.size())
+    throw InputError(what + ": colour must be CV_8UC3 of the depth's size");
+  if (frame.intensity.type() != CV_32FC1 || frame.intensity.size() != frame.depth.size())
+    throw InputError(what + ": intensity must be CV_32FC1 of the depth's size");
+  if (!static_weight.empty() && (static_weight.type() != CV_32FC1 || static_weight.size() != frame.depth.size()))
+    throw InputError(what + ": static weight must be CV_32FC1 of the depth's size (or empty)");
+}
+
+// A frame's depth in [min_depth, max_depth] (metres; 0 outside) and its back-projection.
+struct DepthPoints {
+  const cv::Mat& depth;
+  const CameraIntrinsics& camera;
+  float min_depth, max_depth;
+
+  float valid(int x, int y) const {
+    const float z = depth.at<float>(y, x);
+    return z >= min_depth && z <= max_depth ? z : 0.0f;
+  }
+  Eigen::Vector3f point(int x, int y, float z) const {
+    return Eigen::Vector3f(static_cast<float>((x - camera.cx) / camera.fx) * z,
+                           static_cast<float>((y - camera.cy) / camera.fy) * z, z);
+  }
+};
+
+// The frame at the fused resolution (every stride-th input pixel), what one integrate() works on.
+struct FusedGrid {
+  int stride = 1, width = 0, height = 0;  // width x height fused pixels
+  std::vector<Measurement> measurements;  // weight 0 = not fused
+  // Every measured depth, whatever its weight, also beyond max_depth_m (the ray still crossed free
+  // space): the free-space evidence. 0 = none.
+  std::vector<float> depth;
+  std::vector<float> dynamic_depth;  // depth of pixels weighted as dynamic, 0 = none
+
+  size_t at(int i, int j) const { return static_cast<size_t>(j * width + i); }
+  bool inside(int i, int j) const { return i >= 0 && j >= 0 && i < width && j < height; }
+};
+
+// The surface sample at input pixel (x, y) of valid depth z into m (weight and radius as given
+// by the caller's footprint), or false (m untouched) where no normal can be estimated.
+bool measureAt(const DepthPoints& d, int x, int y, float z, int stride, float discontinuity, float pixel_footprint,
+               float weight, Measurement& m) {
+  const Eigen::Vector3f p = d.point(x, y, z);
+  // Central differences where the neighbour is on the same surface, one-sided otherwise.
+  auto neighbour = [&](int nx, int ny, Eigen::Vector3f& out) {
+    if (nx < 0 || ny < 0 || nx >= d.camera.width || ny >= d.camera.height) return false;
+    const float nz = d.valid(nx, ny);
+    if (nz == 0 || std::abs(nz - z) > discontinuity * z) return false;
+    out = d.point(nx, ny, nz);
+    return true;
+  };
+  auto difference = [&](int dx, int dy, Eigen::Vector3f& out) {
+    Eigen::Vector3f a, b;
+    const bool ha = neighbour(x + dx, y + dy, a), hb = neighbour(x - dx, y - dy, b);
+    if (ha && hb) out = a - b;
+    else if (ha) out = a - p;
+    else if (hb) out = p - b;
+    return ha || hb;
+  };
+  // Two fused pixels apart: over one, Kinect-like noise (5 mm at 2 m) tilts normals by ~20
+  // degrees, associations fail and the map fills with duplicate surfels.
+  Eigen::Vector3f du, dv;
+  if (!difference(2 * stride, 0, du) || !difference(0, 2 * stride, dv)) return false;
+  Eigen::Vector3f n = dv.cross(du);
+  const float len = n.norm();
+  if (len <= 0) return false;
+  n /= len;
+  const Eigen::Vector3f ray = p.normalized();
+  float cos_view = -n.dot(ray);
+  if (cos_view < 0) {
+    n = -n;
+    cos_view = -cos_view;
+  }
+  m.point = p;
+  m.normal = n;
+  m.weight = weight;
+  m.radius = pixel_footprint * z / std::max(cos_view, 0.3f);
+  return true;
+}
+
+// Phase 1 of integrate(): the measurements at the fused resolution and the depths behind them.
+FusedGrid measureFrame(const RgbdFrame& frame, const CameraIntrinsics& camera, const cv::Mat& static_weight,
+                       const FusionConfig& config) {
+  FusedGrid g;
+  g.stride = config.integration_stride;
+  g.width = (camera.width + g.stride - 1) / g.stride;
+  g.height = (camera.height + g.stride - 1) / g.stride;
+  const size_t cells = static_cast<size_t>(g.width) * g.height;
+  g.measurements.resize(cells);
+  g.depth.assign(cells, 0.0f);
+  g.dynamic_depth.assign(cells, 0.0f);
+  const DepthPoints points{frame.depth, camera, static_cast<float>(config.min_depth_m),
+                           static_cast<float>(config.max_depth_m)};
+  const float discontinuity = static_cast<float>(config.depth_discontinuity_ratio);
+  const float min_weight = static_cast<float>(config.min_static_weight);
+  const float pixel_footprint = static_cast<float>(config.radius_scale * g.stride / std::min(camera.fx, camera.fy));
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.height), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const int y = j * g.stride;
+      for (int i = 0; i < g.width; ++i) {
+        const int x = i * g.stride;
+        const float raw = frame.depth.at<float>(y, x);
+        g.depth[g.at(i, j)] = raw > 0 && std::isfinite(raw) ? raw : 0.0f;
+        const float z = points.valid(x, y);
+        if (z == 0) continue;
+        const float w = static_weight.empty() ? 1.0f : static_weight.at<float>(y, x);
+        if (!(w >= min_weight)) {
+          g.dynamic_depth[g.at(i, j)] = z;
+          continue;
+        }
+        measureAt(points, x, y, z, g.stride, discontinuity, pixel_footprint, std::min(w, 1.0f), g.measurements[g.at(i, j)]);
+      }
+    }
+  });
+  return g;
+}
+
+// Phase 2 of integrate(): the nearest surfel per fused pixel (kEmpty where none), and a free-space
+// vote for every surfel in front of the measured surface (its 3x3 fused neighbourhood's nearest
+// depth) by more than margin_m * max(1, depth).
+std::vector<uint64_t> indexMap(std::vector<Surfel>& surfels, const FusedGrid& g, const CameraView& view,
+                               float margin_m) {
+  const float inv_stride = 1.0f / g.stride;
+  return nearestSurfels(surfels.size(), g.measurements.size(), [&](size_t k, auto&& write) {
+    Surfel& s = surfels[k];
+    const Eigen::Vector3f pc = view.centre(s);
+    if (pc.z() < view.min_depth) return;
+    const int i = static_cast<int>(std::lround((view.fx * pc.x() / pc.z() + view.cx) * inv_stride));
+    const int j = static_cast<int>(std::lround((view.fy * pc.y() / pc.z() + view.cy) * inv_stride));
+    if (!g.inside(i, j)) return;
+    write(g.at(i, j), depthKey(pc.z(), static_cast<uint32_t>(k)));
+    float nearest = std::numeric_limits<float>::max();
+    bool all_valid = i > 0 && j > 0 && i < g.width - 1 && j < g.height - 1;
+    for (int dj = -1; dj <= 1 && all_valid; ++dj)
+      for (int di = -1; di <= 1 && all_valid; ++di) {
+        const float d = g.depth[g.at(i + di, j + dj)];
+        all_valid = d > 0;
+        nearest = std::min(nearest, d);
+      }
+    if (all_valid && pc.z() < nearest - margin_m * std::max(1.0f, nearest)) ++s.removal_votes;
+  });
+}
+
+// Whether the disc of a surfel nearest at a fused pixel next to (i, j) already covers m's point.
+bool coveredByNeighbour(const FusedGrid& g, const std::vector<uint64_t>& index_map, const std::vector<Surfel>& surfels,
+                        const CameraView& view, int i, int j, const Measurement& m, float tolerance) {
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di) {
+      if (!g.inside(i + di, j + dj)) continue;
+      const uint64_t key = index_map[g.at(i + di, j + dj)];
+      if (key == kEmpty) continue;
+      const Surfel& s = surfels[keyIndex(key)];
+      const Eigen::Vector3f offset = m.point - view.centre(s);
+      const float along = offset.dot(view.normal(s));
+      if (std::abs(along) < tolerance && offset.squaredNorm() - along * along < s.radius * s.radius) return true;
+    }
+  return false;
+}
+
+// Phase 3 of integrate(), the decision per fused pixel (read-only): merge into the surfel nearest
+// there, add a new one, vote the surfel there out as seen moving, or nothing.
+std::vector<Action> decideActions(const FusedGrid& g, const std::vector<uint64_t>& index_map,
+                                  const std::vector<Surfel>& surfels, const CameraView& view, const FusionConfig& config) {
+  const float assoc = static_cast<float>(config.association_distance_m);
+  const float cos_assoc = static_cast<float>(std::cos(config.association_angle_deg * M_PI / 180.0));
+  const auto decide = [&](int i, int j) {
+    const Measurement& m = g.measurements[g.at(i, j)];
+    const uint64_t key = index_map[g.at(i, j)];
+    if (const float zd = g.dynamic_depth[g.at(i, j)]; zd > 0 && config.dynamic_removal) {
+      // A surfel where the frame now sees a moving surface: it was fused while that surface
+      // stood still or before it was detected.
+      const bool at_surfel = key != kEmpty && std::abs(keyDepth(key) - zd) < assoc * std::max(1.0f, zd);
+      return at_surfel ? Action::kDynamic : Action::kNone;
+    }
+    if (m.weight == 0) return Action::kNone;
+    const float tolerance = assoc * std::max(1.0f, m.point.z());
+    if (key != kEmpty && std::abs(keyDepth(key) - m.point.z()) < tolerance &&
+        view.normal(surfels[keyIndex(key)]).dot(m.normal) > cos_assoc)
+      return Action::kMerge;
+    // A surfel of a neighbouring pixel whose disc already covers this point: nothing to add.
+    return coveredByNeighbour(g, index_map, surfels, view, i, j, m, tolerance) ? Action::kNone : Action::kAdd;
+  };
+  std::vector<Action> action(g.measurements.size(), Action::kNone);
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.height), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < g.width; ++i) action[g.at(i, j)] = decide(i, j);
+  });
+  return action;
+}
+
+// The frame's colour and intensity at fused pixel (i, j).
+cv::Vec3b bgrAt(const RgbdFrame& frame, const FusedGrid& g, int i, int j) {
+  return frame.color.at<cv::Vec3b>(j * g.stride, i * g.stride);
+}
+float intensityAt(const RgbdFrame& frame, const FusedGrid& g, int i, int j) {
+  return frame.intensity.at<float>(j * g.stride, i * g.stride);
+}
+
+// Applies phase 3's merges (confidence-weighted means, one association vote taken back) and
+// dynamic votes. A pixel updates only the surfel nearest at it, so no two pixels write one surfel.
+void mergeMeasurements(std::vector<Surfel>& surfels, const FusedGrid& g, const std::vector<uint64_t>& index_map,
+                       const std::vector<Action>& action, const RgbdFrame& frame, const SE3& T_world_cam,
+                       int frame_index) {
+  const Eigen::Matrix3f R_world_cam = T_world_cam.linear().cast<float>();
+  const Eigen::Vector3f t_world_cam = T_world_cam.translation().cast<float>();
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.height), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < g.width; ++i) {
+        const size_t cell = g.at(i, j);
+        if (action[cell] == Action::kDynamic) ++surfels[keyIndex(index_map[cell])].removal_votes;
+        if (action[cell] != Action::kMerge) continue;
+        const Measurement& m = g.measurements[cell];
+        Surfel& s = surfels[keyIndex(index_map[cell])];
+        const float c = s.confidence, w = m.weight, sum = c + w;
+        s.position = (c * s.position + w * (R_world_cam * m.point + t_world_cam)) / sum;
+        s.normal = (c * s.normal + w * (R_world_cam * m.normal)).normalized();
+        s.radius = (c * s.radius + w * m.radius) / sum;
+        const cv::Vec3b bgr = bgrAt(frame, g, i, j);
+        for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = (c * s.bgr[ch] + w * bgr[ch]) / sum;
+        s.intensity = (c * s.intensity + w * intensityAt(frame, g, i, j)) / sum;
+        s.confidence = sum;
+        s.last_seen = frame_index;
+        s.removal_votes = std::max(0, s.removal_votes - 1);
+      }
+  });
+}
+
+// Phase 5 of integrate(): a new surfel per pixel phase 3 chose to add, in row order, while the map
+// holds fewer than `budget`. Returns false when the budget stopped it.
+bool addSurfels(std::vector<Surfel>& surfels, size_t budget, const FusedGrid& g, const std::vector<Action>& action,
+                const RgbdFrame& frame, const SE3& T_world_cam, int frame_index) {
+  const Eigen::Matrix3f R_world_cam = T_world_cam.linear().cast<float>();
+  const Eigen::Vector3f t_world_cam = T_world_cam.translation().cast<float>();
+  for (int j = 0; j < g.height; ++j)
+    for (int i = 0; i < g.width; ++i) {
+      if (action[g.at(i, j)] != Action::kAdd) continue;
+      if (surfels.size() >= budget) return false;
+      const Measurement& m = g.measurements[g.at(i, j)];
+      Surfel s;
+      s.position = R_world_cam * m.point + t_world_cam;
+      s.normal = R_world_cam * m.normal;
+      s.radius = m.radius;
+      s.confidence = m.weight;
+      const cv::Vec3b bgr = bgrAt(frame, g, i, j);
+      for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = bgr[ch];
+      s.intensity = intensityAt(frame, g, i, j);
+      s.created = s.last_seen = frame_index;
+      surfels.push_back(s);
+    }
+  return true;
+}
+
+// Unstable surfels are drawn for tracking only while they are being observed (noise and the
+// unmasked parts of moving objects stay out of the tracking reference, as in ElasticFusion).
+bool drawnForTracking(const Surfel& s, float stable_confidence, int latest_frame) {
+  return s.confidence >= stable_confidence || s.last_seen >= latest_frame;
+}
+
+// Calls visit(pixel, z) for every pixel of a w x h image whose ray meets surfel s's disc, z the
+// hit's depth; nothing for a surfel nearer than min_depth or seen from behind. Discs larger than
+// max_half_px (radius, pixels) are clipped: only views much closer than any fused one produce
+// them, and the cost grows with the square.
+template <class Visit>
+void discSplat(const Surfel& s, const CameraView& view, int w, int h, float max_half_px, Visit&& visit) {
+  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
+  const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
+  if (pc.z() < min_depth) return;
+  const Eigen::Vector3f nc = R_cam_world * s.normal;
+  const float n_dot_p = nc.dot(pc);
+  if (n_dot_p >= 0) return;  // seen from behind
+  const float u = fx * pc.x() / pc.z() + cx, v = fy * pc.y() / pc.z() + cy;
+  // Bounding box of the disc's image: an ellipse with semi-axes radius_px and radius_px * cos(view
+  // angle), the short one along the image direction in which the normal tilts away. Oblique
+  // discs (floors, walls seen at grazing angles) are the large ones, so this halves the work.
+  // The 15 % margin covers perspective; the exact ray-disc test below decides.
+  const float radius_px = std::min(max_half_px, s.radius * std::max(fx, fy) / pc.z());
+  const float cos_view = -n_dot_p / pc.norm();
+  Eigen::Vector2f tilt(nc.x() * pc.z() - nc.z() * pc.x(), nc.y() * pc.z() - nc.z() * pc.y());
+  const float tilt_norm = tilt.norm();
+  tilt = tilt_norm > 1e-9f ? Eigen::Vector2f(tilt / tilt_norm) : Eigen::Vector2f(1, 0);
+  const float c2 = cos_view * cos_view;
+  const float half_u = 1.15f * radius_px * std::sqrt(tilt.y() * tilt.y() + c2 * tilt.x() * tilt.x());
+  const float half_v = 1.15f * radius_px * std::sqrt(tilt.x() * tilt.x() + c2 * tilt.y() * tilt.y());
+  const int x0 = std::max(0, static_cast<int>(std::ceil(u - half_u)));
+  const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half_u)));
+  const int y0 = std::max(0, static_cast<int>(std::ceil(v - half_v)));
+  const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half_v)));
+  const float r2 = s.radius * s.radius;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      // Where the pixel's ray meets the surfel's plane, if inside its disc.
+      const Eigen::Vector3f ray((x - cx) / fx, (y - cy) / fy, 1.0f);
+      const float denom = nc.dot(ray);
+      if (denom > -1e-4f) continue;
+      const float z = n_dot_p / denom;
+      if (z < min_depth || (z * ray - pc).squaredNorm() > r2) continue;
+      visit(static_cast<size_t>(y) * w + x, z);
+    }
+}
+
+// predict()'s images from its z-buffer (front surfel per pixel) and averaged depth.
+ModelPrediction predictionImages(const std::vector<Surfel>& surfels, const std::vector<uint64_t>& zbuffer,
+                                 const std::vector<float>& depth, const CameraView& view, int w, int h) {
+  ModelPrediction out;
+  out.depth = cv::Mat::zeros(h, w, CV_32FC1);
+  out.intensity = cv::Mat::zeros(h, w, CV_32FC1);
+  out.color = cv::Mat::zeros(h, w, CV_8UC3);
+  out.normal = cv::Mat::zeros(h, w, CV_32FC3);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
+        if (key == kEmpty) continue;
+        const Surfel& s = surfels[keyIndex(key)];
+        out.depth.at<float>(y, x) = depth[static_cast<size_t>(y) * w + x];
+        out.intensity.at<float>(y, x) = s.intensity;
+        out.color.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(s.bgr[0]),
+                                                  cv::saturate_cast<uchar>(s.bgr[1]),
+                                                  cv::saturate_cast<uchar>(s.bgr[2]));
+        const Eigen::Vector3f nc = view.normal(s);
+        out.normal.at<cv::Vec3f>(y, x) = cv::Vec3f(nc.x(), nc.y(), nc.z());
+      }
+  });
+  return out;
+}
+
 }  // namespace
 
 void validate(const FusionConfig& c) {
@@ -220,222 +553,33 @@ StaticMap::StaticMap(const FusionConfig& config) : config_(config) {
 
 void StaticMap::integrate(const RgbdFrame& frame, const CameraIntrinsics& camera, const SE3& T_world_cam,
                           const cv::Mat& static_weight) {
-  const std::string what = "fusion input '" + frame.name + "'";
-  if (!camera.valid()) throw InputError(what + ": invalid camera intrinsics");
-  if (frame.depth.empty() || frame.depth.type() != CV_32FC1) throw InputError(what + ": depth must be CV_32FC1");
-  if (frame.depth.cols != camera.width || frame.depth.rows != camera.height)
-    throw InputError(what + ": depth is " + std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
-                     " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
-  if (frame.color.type() != CV_8UC3 || frame.color.size() != frame.depth.size())
-    throw InputError(what + ": colour must be CV_8UC3 of the depth's size");
-  if (frame.intensity.type() != CV_32FC1 || frame.intensity.size() != frame.depth.size())
-    throw InputError(what + ": intensity must be CV_32FC1 of the depth's size");
-  if (!static_weight.empty() && (static_weight.type() != CV_32FC1 || static_weight.size() != frame.depth.size()))
-    throw InputError(what + ": static weight must be CV_32FC1 of the depth's size (or empty)");
-
-  const int stride = config_.integration_stride;
-  const int gw = (camera.width + stride - 1) / stride;
-  const int gh = (camera.height + stride - 1) / stride;
+  checkFusionInput(frame, camera, static_weight);
   const CameraView view(T_world_cam, camera, config_.min_depth_m);
-  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
-  const float max_depth = static_cast<float>(config_.max_depth_m);
-  const float discontinuity = static_cast<float>(config_.depth_discontinuity_ratio);
-  const float min_weight = static_cast<float>(config_.min_static_weight);
-  const float pixel_footprint = static_cast<float>(config_.radius_scale * stride / std::min(camera.fx, camera.fy));
-  const cv::Mat& depth = frame.depth;
-
-  auto validDepth = [&](int x, int y) {
-    const float z = depth.at<float>(y, x);
-    return z >= min_depth && z <= max_depth ? z : 0.0f;
-  };
-  auto pointAt = [&](int x, int y, float z) {
-    return Eigen::Vector3f(static_cast<float>((x - camera.cx) / camera.fx) * z,
-                           static_cast<float>((y - camera.cy) / camera.fy) * z, z);
-  };
-
-  // 1. Measurements at the fused resolution; grid_depth (every measured depth, whatever its
-  // weight, also beyond max_depth_m: the ray still crossed free space) is the free-space evidence.
-  std::vector<Measurement> meas(static_cast<size_t>(gw) * gh);
-  std::vector<float> grid_depth(meas.size(), 0.0f);
-  std::vector<float> dynamic_depth(meas.size(), 0.0f);  // depth of pixels weighted as dynamic
-  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j) {
-      const int y = j * stride;
-      for (int i = 0; i < gw; ++i) {
-        const int x = i * stride;
-        const float raw = depth.at<float>(y, x);
-        grid_depth[j * gw + i] = raw > 0 && std::isfinite(raw) ? raw : 0.0f;
-        const float z = validDepth(x, y);
-        if (z == 0) continue;
-        const float w = static_weight.empty() ? 1.0f : static_weight.at<float>(y, x);
-        if (!(w >= min_weight)) {
-          dynamic_depth[j * gw + i] = z;
-          continue;
-        }
-        const Eigen::Vector3f p = pointAt(x, y, z);
-        // Central differences where the neighbour is on the same surface, one-sided otherwise.
-        auto neighbour = [&](int nx, int ny, Eigen::Vector3f& out) {
-          if (nx < 0 || ny < 0 || nx >= camera.width || ny >= camera.height) return false;
-          const float nz = validDepth(nx, ny);
-          if (nz == 0 || std::abs(nz - z) > discontinuity * z) return false;
-          out = pointAt(nx, ny, nz);
-          return true;
-        };
-        auto difference = [&](int dx, int dy, Eigen::Vector3f& out) {
-          Eigen::Vector3f a, b;
-          const bool ha = neighbour(x + dx, y + dy, a), hb = neighbour(x - dx, y - dy, b);
-          if (ha && hb) out = a - b;
-          else if (ha) out = a - p;
-          else if (hb) out = p - b;
-          return ha || hb;
-        };
-        // Two fused pixels apart: over one, Kinect-like noise (5 mm at 2 m) tilts normals by ~20
-        // degrees, associations fail and the map fills with duplicate surfels.
-        Eigen::Vector3f du, dv;
-        if (!difference(2 * stride, 0, du) || !difference(0, 2 * stride, dv)) continue;
-        Eigen::Vector3f n = dv.cross(du);
-        const float len = n.norm();
-        if (len <= 0) continue;
-        n /= len;
-        const Eigen::Vector3f view = p.normalized();
-        float cos_view = -n.dot(view);
-        if (cos_view < 0) {
-          n = -n;
-          cos_view = -cos_view;
-        }
-        Measurement& m = meas[j * gw + i];
-        m.point = p;
-        m.normal = n;
-        m.weight = std::min(w, 1.0f);
-        m.radius = pixel_footprint * z / std::max(cos_view, 0.3f);
-      }
-    }
-  });
-
-  // 2. Index map: the nearest surfel per fused pixel; free-space votes for surfels in front of
-  // the measured surface.
-  const float inv_stride = 1.0f / stride;
-  const float margin = static_cast<float>(config_.free_space_margin_m);
-  const std::vector<uint64_t> index_map = nearestSurfels(surfels_.size(), meas.size(), [&](size_t k, auto&& write) {
-    Surfel& s = surfels_[k];
-    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-    if (pc.z() < min_depth) return;
-    const int i = static_cast<int>(std::lround((fx * pc.x() / pc.z() + cx) * inv_stride));
-    const int j = static_cast<int>(std::lround((fy * pc.y() / pc.z() + cy) * inv_stride));
-    if (i < 0 || j < 0 || i >= gw || j >= gh) return;
-    write(static_cast<size_t>(j) * gw + i, depthKey(pc.z(), static_cast<uint32_t>(k)));
-    float nearest = std::numeric_limits<float>::max();
-    bool all_valid = i > 0 && j > 0 && i < gw - 1 && j < gh - 1;
-    for (int dj = -1; dj <= 1 && all_valid; ++dj)
-      for (int di = -1; di <= 1 && all_valid; ++di) {
-        const float d = grid_depth[(j + dj) * gw + i + di];
-        all_valid = d > 0;
-        nearest = std::min(nearest, d);
-      }
-    if (all_valid && pc.z() < nearest - margin * std::max(1.0f, nearest)) ++s.removal_votes;
-  });
-
-  // 3. Decide per fused pixel (read-only), then apply. A pixel updates only the surfel nearest
-  // at that pixel, so no two pixels write the same surfel.
-  const float assoc = static_cast<float>(config_.association_distance_m);
-  const float cos_assoc = static_cast<float>(std::cos(config_.association_angle_deg * M_PI / 180.0));
-  std::vector<Action> action(meas.size(), Action::kNone);
-  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j)
-      for (int i = 0; i < gw; ++i) {
-        const Measurement& m = meas[j * gw + i];
-        const uint64_t key = index_map[j * gw + i];
-        if (const float zd = dynamic_depth[j * gw + i]; zd > 0 && config_.dynamic_removal) {
-          // A surfel where the frame now sees a moving surface: it was fused while that surface
-          // stood still or before it was detected.
-          if (key != kEmpty && std::abs(keyDepth(key) - zd) < assoc * std::max(1.0f, zd))
-            action[j * gw + i] = Action::kDynamic;
-          continue;
-        }
-        if (m.weight == 0) continue;
-        const float tolerance = assoc * std::max(1.0f, m.point.z());
-        if (key != kEmpty && std::abs(keyDepth(key) - m.point.z()) < tolerance) {
-          const Eigen::Vector3f n_cam = R_cam_world * surfels_[keyIndex(key)].normal;
-          if (n_cam.dot(m.normal) > cos_assoc) {
-            action[j * gw + i] = Action::kMerge;
-            continue;
-          }
-        }
-        // A surfel of a neighbouring pixel whose disc already covers this point: nothing to add.
-        bool covered = false;
-        for (int dj = -1; dj <= 1 && !covered; ++dj)
-          for (int di = -1; di <= 1 && !covered; ++di) {
-            const int ni = i + di, nj = j + dj;
-            if (ni < 0 || nj < 0 || ni >= gw || nj >= gh) continue;
-            const uint64_t nkey = index_map[nj * gw + ni];
-            if (nkey == kEmpty) continue;
-            const Surfel& s = surfels_[keyIndex(nkey)];
-            const Eigen::Vector3f offset = m.point - (R_cam_world * s.position + t_cam_world);
-            const float along = offset.dot(R_cam_world * s.normal);
-            covered = std::abs(along) < tolerance && offset.squaredNorm() - along * along < s.radius * s.radius;
-          }
-        if (!covered) action[j * gw + i] = Action::kAdd;
-      }
-  });
-
-  const Eigen::Matrix3f R_world_cam = T_world_cam.linear().cast<float>();
-  const Eigen::Vector3f t_world_cam = T_world_cam.translation().cast<float>();
-  const int frame_index = frame_index_;
-  auto bgrAt = [&](int i, int j) { return frame.color.at<cv::Vec3b>(j * stride, i * stride); };
-  auto intensityAt = [&](int i, int j) { return frame.intensity.at<float>(j * stride, i * stride); };
-  tbb::parallel_for(tbb::blocked_range<int>(0, gh), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j)
-      for (int i = 0; i < gw; ++i) {
-        if (action[j * gw + i] == Action::kDynamic) ++surfels_[keyIndex(index_map[j * gw + i])].removal_votes;
-        if (action[j * gw + i] != Action::kMerge) continue;
-        const Measurement& m = meas[j * gw + i];
-        Surfel& s = surfels_[keyIndex(index_map[j * gw + i])];
-        const float c = s.confidence, w = m.weight, sum = c + w;
-        s.position = (c * s.position + w * (R_world_cam * m.point + t_world_cam)) / sum;
-        s.normal = (c * s.normal + w * (R_world_cam * m.normal)).normalized();
-        s.radius = (c * s.radius + w * m.radius) / sum;
-        const cv::Vec3b bgr = bgrAt(i, j);
-        for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = (c * s.bgr[ch] + w * bgr[ch]) / sum;
-        s.intensity = (c * s.intensity + w * intensityAt(i, j)) / sum;
-        s.confidence = sum;
-        s.last_seen = frame_index;
-        s.removal_votes = std::max(0, s.removal_votes - 1);
-      }
-  });
+  // 1. Measurements at the fused resolution, 2. the surfel nearest at each and free-space votes,
+  // 3. per fused pixel: merge, add or a dynamic vote (decided read-only, then applied).
+  const FusedGrid grid = measureFrame(frame, camera, static_weight, config_);
+  const std::vector<uint64_t> index_map =
+      indexMap(surfels_, grid, view, static_cast<float>(config_.free_space_margin_m));
+  const std::vector<Action> action = decideActions(grid, index_map, surfels_, view, config_);
+  mergeMeasurements(surfels_, grid, index_map, action, frame, T_world_cam, frame_index_);
 
   // 4. Remove surfels seen through or seen moving, and those that never became stable.
   const float stable = static_cast<float>(config_.stable_confidence);
   const int window = config_.unstable_window_frames;
   const int votes = config_.free_space_votes;
+  const int frame_index = frame_index_;
   std::erase_if(surfels_, [&](const Surfel& s) {
     return s.removal_votes >= votes || (s.confidence < stable && frame_index - s.created > window);
   });
 
   // 5. New surfels, within the memory budget.
-  const size_t budget = static_cast<size_t>(config_.max_surfels);
-  for (int j = 0; j < gh; ++j)
-    for (int i = 0; i < gw; ++i) {
-      if (action[j * gw + i] != Action::kAdd) continue;
-      if (surfels_.size() >= budget) {
-        if (!budget_reached_)
-          spdlog::warn("fusion: the map reached its budget of {} surfels (setting max_surfels); new surfaces "
-                       "are no longer added",
-                       config_.max_surfels);
-        budget_reached_ = true;
-        break;
-      }
-      const Measurement& m = meas[j * gw + i];
-      Surfel s;
-      s.position = R_world_cam * m.point + t_world_cam;
-      s.normal = R_world_cam * m.normal;
-      s.radius = m.radius;
-      s.confidence = m.weight;
-      const cv::Vec3b bgr = bgrAt(i, j);
-      for (int ch = 0; ch < 3; ++ch) s.bgr[ch] = bgr[ch];
-      s.intensity = intensityAt(i, j);
-      s.created = s.last_seen = frame_index;
-      surfels_.push_back(s);
-    }
+  if (!addSurfels(surfels_, static_cast<size_t>(config_.max_surfels), grid, action, frame, T_world_cam, frame_index_)) {
+    if (!budget_reached_)
+      spdlog::warn("fusion: the map reached its budget of {} surfels (setting max_surfels); new surfaces "
+                   "are no longer added",
+                   config_.max_surfels);
+    budget_reached_ = true;
+  }
 
   updateKeyframes(T_world_cam, camera);
   ++frame_index_;
@@ -462,83 +606,20 @@ ModelPrediction StaticMap::predict(const SE3& T_world_cam, const CameraIntrinsic
   if (!camera.valid()) throw InputError("fusion predict: invalid camera intrinsics");
   const int w = camera.width, h = camera.height;
   const CameraView view(T_world_cam, camera, config_.min_depth_m);
-  const auto& [R_cam_world, t_cam_world, fx, fy, cx, cy, min_depth] = view;
-  // Discs larger than this (radius, pixels) are clipped: only views much closer than any fused one
-  // produce them, and the cost grows with the square.
-  constexpr int kMaxHalfSplat = 8;
+  constexpr float kMaxHalfSplat = 8;  // pixels: discSplat's clipping
   const float stable = static_cast<float>(config_.stable_confidence);
   const int latest = frame_index_ - 1;
-  const size_t pixels = static_cast<size_t>(w) * h;
-
-  // Calls visit(pixel, z) for every pixel whose ray meets surfel k's disc, z the hit's depth.
   const auto splat = [&](size_t k, auto&& visit) {
-    const Surfel& s = surfels_[k];
-    // Unstable surfels only while they are being observed (noise and the unmasked parts of moving
-    // objects stay out of the tracking reference, as in ElasticFusion).
-    if (s.confidence < stable && s.last_seen < latest) return;
-    const Eigen::Vector3f pc = R_cam_world * s.position + t_cam_world;
-    if (pc.z() < min_depth) return;
-    const Eigen::Vector3f nc = R_cam_world * s.normal;
-    const float n_dot_p = nc.dot(pc);
-    if (n_dot_p >= 0) return;  // seen from behind
-    const float u = fx * pc.x() / pc.z() + cx, v = fy * pc.y() / pc.z() + cy;
-    // Bounding box of the disc's image: an ellipse with semi-axes radius_px and radius_px * cos(view
-    // angle), the short one along the image direction in which the normal tilts away. Oblique
-    // discs (floors, walls seen at grazing angles) are the large ones, so this halves the work.
-    // The 15 % margin covers perspective; the exact ray-disc test below decides.
-    const float radius_px = std::min(static_cast<float>(kMaxHalfSplat), s.radius * std::max(fx, fy) / pc.z());
-    const float cos_view = -n_dot_p / pc.norm();
-    Eigen::Vector2f tilt(nc.x() * pc.z() - nc.z() * pc.x(), nc.y() * pc.z() - nc.z() * pc.y());
-    const float tilt_norm = tilt.norm();
-    tilt = tilt_norm > 1e-9f ? Eigen::Vector2f(tilt / tilt_norm) : Eigen::Vector2f(1, 0);
-    const float c2 = cos_view * cos_view;
-    const float half_u = 1.15f * radius_px * std::sqrt(tilt.y() * tilt.y() + c2 * tilt.x() * tilt.x());
-    const float half_v = 1.15f * radius_px * std::sqrt(tilt.x() * tilt.x() + c2 * tilt.y() * tilt.y());
-    const int x0 = std::max(0, static_cast<int>(std::ceil(u - half_u)));
-    const int x1 = std::min(w - 1, static_cast<int>(std::floor(u + half_u)));
-    const int y0 = std::max(0, static_cast<int>(std::ceil(v - half_v)));
-    const int y1 = std::min(h - 1, static_cast<int>(std::floor(v + half_v)));
-    const float r2 = s.radius * s.radius;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        // Where the pixel's ray meets the surfel's plane, if inside its disc.
-        const Eigen::Vector3f ray((x - cx) / fx, (y - cy) / fy, 1.0f);
-        const float denom = nc.dot(ray);
-        if (denom > -1e-4f) continue;
-        const float z = n_dot_p / denom;
-        if (z < min_depth || (z * ray - pc).squaredNorm() > r2) continue;
-        visit(static_cast<size_t>(y) * w + x, z);
-      }
+    if (drawnForTracking(surfels_[k], stable, latest)) discSplat(surfels_[k], view, w, h, kMaxHalfSplat, visit);
   };
-
-  const std::vector<uint64_t> zbuffer = nearestSurfels(surfels_.size(), pixels, [&](size_t k, auto&& write) {
-    const uint64_t centre_key = depthKey(view.centreDepth(surfels_[k]), static_cast<uint32_t>(k));
-    splat(k, [&](size_t pixel, float) { write(pixel, centre_key); });
-  });
+  const std::vector<uint64_t> zbuffer =
+      nearestSurfels(surfels_.size(), static_cast<size_t>(w) * h, [&](size_t k, auto&& write) {
+        const uint64_t centre_key = depthKey(view.centreDepth(surfels_[k]), static_cast<uint32_t>(k));
+        splat(k, [&](size_t pixel, float) { write(pixel, centre_key); });
+      });
   const std::vector<float> depth =
       averagedDepth(surfels_, zbuffer, view, w, static_cast<float>(config_.association_distance_m), splat);
-
-  ModelPrediction out;
-  out.depth = cv::Mat::zeros(h, w, CV_32FC1);
-  out.intensity = cv::Mat::zeros(h, w, CV_32FC1);
-  out.color = cv::Mat::zeros(h, w, CV_8UC3);
-  out.normal = cv::Mat::zeros(h, w, CV_32FC3);
-  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < w; ++x) {
-        const uint64_t key = zbuffer[static_cast<size_t>(y) * w + x];
-        if (key == kEmpty) continue;
-        const Surfel& s = surfels_[keyIndex(key)];
-        out.depth.at<float>(y, x) = depth[static_cast<size_t>(y) * w + x];
-        out.intensity.at<float>(y, x) = s.intensity;
-        out.color.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(s.bgr[0]),
-                                                  cv::saturate_cast<uchar>(s.bgr[1]),
-                                                  cv::saturate_cast<uchar>(s.bgr[2]));
-        const Eigen::Vector3f nc = R_cam_world * s.normal;
-        out.normal.at<cv::Vec3f>(y, x) = cv::Vec3f(nc.x(), nc.y(), nc.z());
-      }
-  });
-  return out;
+  return predictionImages(surfels_, zbuffer, depth, view, w, h);
 }
 
 cv::Mat StaticMap::predictDepth(const SE3& T_world_cam, const CameraIntrinsics& camera) const {
@@ -549,12 +630,8 @@ cv::Mat StaticMap::predictDepth(const SE3& T_world_cam, const CameraIntrinsics& 
   const int latest = frame_index_ - 1;
   constexpr float kMaxHalfSplat = 8;  // pixels; see predict()
   // Half side of the square over the projected radius: 0.5 keeps it inside the disc's image up to
-  // ~45 deg oblique, where the plane's depth needs no ray-disc test. Measured (model keyframes;
-  // ATE mm on static fr1 / augmented fr1 / synth static twin of seed 2 / synth seed 3, and the
-  // microbenchmark): 1.0 13.1 / 14.7 / 4.9 / 7.8, 9.2 ms (plane extrapolated beyond the disc);
-  // 1.0 with the ray-disc test 13.2 / 14.8 / 3.1 / 5.7, 14.7 ms; 0.7 13.0 / 14.6 / 3.5 / 6.7,
-  // 7.9 ms; 0.5 12.9 / 14.5 / 2.6 / 5.3, 6.8 ms; the centre pixel only 12.9 / 14.5 / 1.7 / 9.6,
-  // 5.7 ms; predict() 13.2 / 14.9 / 3.0 / 5.5, 17 ms.
+  // ~45 deg oblique, where the plane's depth needs no ray-disc test; the most accurate and among the
+  // fastest of the sizes measured (docs/tuning.md#predict_depth).
   constexpr float kInnerSquare = 0.5f;
   // predict()'s surfels (the same rule for unstable ones, none seen from behind).
   const auto splat = [&](size_t k, auto&& visit) {

@@ -147,7 +147,6 @@ class StaticMap {
 
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }
-  int framesIntegrated() const { return frame_index_; }
   const std::vector<Surfel>& surfels() const { return surfels_; }
   const FusionConfig& config() const { return config_; }
   // Camera poses kept for the previews.

@@ -107,7 +107,7 @@ void writeSummary(const fs::path& root, const std::string& bag_path, const BagCo
 BagConversion convertBagToTum(const std::string& bag_path, const std::string& out_dir,
                               const SequenceOptions& options, bool overwrite, const std::atomic<bool>* stop,
                               const char* const* reason) {
-  const std::optional<std::string> groundtruth = groundtruthText(options.groundtruth);
+  const std::optional<std::string> groundtruth = groundtruthText(options.bag.groundtruth);
   BagReader reader = BagReader::open(bag_path, options);
   prepareOutputDir(out_dir, overwrite);
   const fs::path root(out_dir);

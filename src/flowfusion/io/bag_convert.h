@@ -2,7 +2,7 @@
 // `flowfusion convert`: a ROS 1 or ROS 2 bag (io/bag_reader.h) written as a TUM-layout folder that any
 // TUM tool reads: rgb/ (8-bit BGR PNG as recorded, not undistorted), depth/ (16-bit PNG at 5000
 // units per metre, TUM's scale), rgb.txt and depth.txt (the header stamps), camera.txt (with the
-// lens distortion when there is one) and groundtruth.txt when options.groundtruth is given, and
+// lens distortion when there is one) and groundtruth.txt when options.bag.groundtruth is given, and
 // summary.json saying whether every frame was written. As `run` does: every option and the ground
 // truth are checked before the first frame; a conversion stopped (a stop request, a frame that
 // fails) leaves the frames before it with their lists, marked partial ("complete": false and the

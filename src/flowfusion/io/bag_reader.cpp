@@ -1,15 +1,11 @@
 #include "flowfusion/io/bag_reader.h"
 
 #include <algorithm>
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "flowfusion/core/error.h"
-#include "flowfusion/core/image_file.h"
 #include "flowfusion/io/dataset_layout.h"
+#include "flowfusion/io/ros_images.h"
 #include "flowfusion/io/tum_text.h"
 
 namespace ff {
@@ -22,14 +18,6 @@ const std::vector<std::string> kColorTopics = {"/camera/rgb/image_color", "/came
 const std::vector<std::string> kDepthTopics = {"/camera/depth/image", "/camera/aligned_depth_to_color/image_raw",
                                                "/camera/depth_registered/image_raw", "/camera/depth/image_raw"};
 
-// The stamp as the decimal number it is ("sec.nnnnnnnnn" parsed), so that a stamp written to a
-// TUM list with %.6f reads back as the same double.
-double seconds(const RosStamp& t) {
-  char buf[48];
-  std::snprintf(buf, sizeof(buf), "%lld.%09u", static_cast<long long>(t.sec), t.nsec);
-  return std::strtod(buf, nullptr);
-}
-
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
   return s;
@@ -37,90 +25,8 @@ std::string lower(std::string s) {
 
 bool isImage(RosType t) { return t == RosType::kImage || t == RosType::kCompressedImage; }
 
-enum class Kind { kColor, kDepth };
-
-// Why an encoding cannot be read as `kind`, or "" when it can.
-std::string encodingProblem(bool compressed, const std::string& encoding, Kind kind) {
-  const std::string e = lower(encoding);
-  if (compressed) {
-    if (e.find("compresseddepth") != std::string::npos)
-      return "compressedDepth images are not supported (record the raw depth topic)";
-    if (kind == Kind::kDepth) return "depth must be a raw sensor_msgs/Image (16UC1, mono16 or 32FC1)";
-    if (e.find("png") == std::string::npos && e.find("jpeg") == std::string::npos &&
-        e.find("jpg") == std::string::npos)
-      return "compressed format '" + encoding + "' is not png or jpeg";
-    return "";
-  }
-  if (kind == Kind::kColor) {
-    if (e == "rgb8" || e == "bgr8" || e == "mono8" || e == "rgba8" || e == "bgra8") return "";
-    return "colour encoding '" + encoding + "' is not one of rgb8, bgr8, mono8, rgba8, bgra8";
-  }
-  if (e == "16uc1" || e == "mono16" || e == "32fc1") return "";
-  return "depth encoding '" + encoding + "' is not one of 16UC1, mono16, 32FC1";
-}
-
-// The pixels of a raw image message (rows `step` bytes apart), copied; InputError when the
-// message holds fewer bytes than it declares.
-cv::Mat wrapImage(const RosImage& m, int type, const std::string& name) {
-  const size_t row = size_t(m.width) * CV_ELEM_SIZE(type);
-  if (m.width == 0 || m.height == 0 || m.step < row || m.size < size_t(m.step) * m.height ||
-      static_cast<long long>(m.width) * m.height > kMaxImagePixels)
-    throw InputError(name + ": image message of " + std::to_string(m.width) + "x" + std::to_string(m.height) +
-                     " (step " + std::to_string(m.step) + ") holds " + std::to_string(m.size) + " bytes");
-  cv::Mat view(int(m.height), int(m.width), type, const_cast<uint8_t*>(m.data), m.step);
-  cv::Mat out = view.clone();
-  if (m.big_endian && CV_ELEM_SIZE1(type) > 1) {
-    // Multi-byte samples stored big-endian: reverse each sample's bytes.
-    const size_t n = CV_ELEM_SIZE1(type);
-    for (int y = 0; y < out.rows; ++y)
-      for (uint8_t* p = out.ptr<uint8_t>(y); p < out.ptr<uint8_t>(y) + row; p += n) std::reverse(p, p + n);
-  }
-  return out;
-}
-
-cv::Mat toBgr(const cv::Mat& image, const std::string& name) {
-  if (image.depth() != CV_8U) throw InputError(name + ": colour image must be 8-bit per channel");
-  cv::Mat bgr;
-  if (image.channels() == 1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
-  else if (image.channels() == 4) cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
-  else bgr = image;
-  return bgr;
-}
-
-std::string sizeMismatch(const std::string& name, long long w, long long h, const CameraIntrinsics& c) {
-  return name + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", the camera is " +
-         std::to_string(c.width) + "x" + std::to_string(c.height);
-}
-
-void checkSize(const cv::Mat& image, const std::string& name, const CameraIntrinsics& c) {
-  if (image.cols != c.width || image.rows != c.height) throw InputError(sizeMismatch(name, image.cols, image.rows, c));
-}
-
-// A compressed colour image decoded; a PNG declares its size before any pixel is decoded
-// (image_file.h), so a wrong one is refused there.
-cv::Mat decodeCompressed(const RosImage& m, const std::string& name, const CameraIntrinsics& c) {
-  const uint8_t* d = m.data;
-  if (m.size >= 24 && d[1] == 'P' && d[2] == 'N' && d[3] == 'G') {
-    const auto be32 = [&](size_t at) {
-      return uint32_t(d[at]) << 24 | uint32_t(d[at + 1]) << 16 | uint32_t(d[at + 2]) << 8 | uint32_t(d[at + 3]);
-    };
-    if (be32(16) != uint32_t(c.width) || be32(20) != uint32_t(c.height))
-      throw InputError(sizeMismatch(name, be32(16), be32(20), c));
-  }
-  cv::Mat decoded;
-  if (m.size > 0 && m.size < size_t(INT32_MAX)) {
-    const cv::Mat bytes(1, int(m.size), CV_8U, const_cast<uint8_t*>(d));
-    try {
-      decoded = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception&) {
-    }
-  }
-  if (decoded.empty()) throw InputError(name + ": compressed image (" + m.encoding + ") does not decode");
-  return toBgr(decoded, name);
-}
-
 // InputError unless the options' depth scale is usable, before anything is read.
-void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag_depth_scale, "--depth-scale"); }
+void checkOptions(const SequenceOptions& options) { checkDepthScale(options.bag.depth_scale, "--depth-scale"); }
 
 }  // namespace
 
@@ -154,8 +60,6 @@ struct BagReader::Impl {
   void readStamps();
   void readCamera();
   std::string cameraInfoTopic() const;
-  cv::Mat decodeColor(const RosImage& m, const std::string& name) const;
-  cv::Mat decodeDepth(const RosImage& m, const std::string& name, double& scale) const;
   std::string listing() const;
 };
 
@@ -207,8 +111,8 @@ std::string BagReader::Impl::chooseTopic(const std::string& given, const std::ve
 
 void BagReader::Impl::pickTopics() {
   topics = recording->topics();
-  color_topic = chooseTopic(options.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
-  depth_topic = chooseTopic(options.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
+  color_topic = chooseTopic(options.bag.rgb_topic, kColorTopics, false, "colour", "--rgb-topic");
+  depth_topic = chooseTopic(options.bag.depth_topic, kDepthTopics, true, "depth", "--depth-topic");
   if (color_topic == depth_topic) fail("colour and depth topics are the same (" + color_topic + ")");
   color_type = typeOf(color_topic);
   depth_type = typeOf(depth_topic);
@@ -221,8 +125,8 @@ void BagReader::Impl::readStamps() {
     const bool is_color = slot == 0;
     const std::string& topic = is_color ? color_topic : depth_topic;
     std::vector<double>& out = is_color ? color_stamps : depth_stamps;
-    const double t = seconds(m.stamp);
-    if (const std::string problem = encodingProblem(m.compressed, m.encoding, is_color ? Kind::kColor : Kind::kDepth);
+    const double t = rosSeconds(m.stamp);
+    if (const std::string problem = rosEncodingProblem(m.compressed, m.encoding, is_color ? RosImageKind::kColor : RosImageKind::kDepth);
         !problem.empty())
       fail(topic + " message " + std::to_string(out.size()) + ": " + problem);
     if (!out.empty() && !(t > out.back()))
@@ -259,57 +163,7 @@ void BagReader::Impl::readCamera() {
   const std::string topic = cameraInfoTopic();
   const std::optional<RosCameraInfo> msg = recording->firstCameraInfo(topic);
   if (!msg) fail(topic + ": no CameraInfo message; give --camera");
-  std::vector<double> v = {msg->k[0], msg->k[4], msg->k[2], msg->k[5], double(msg->width), double(msg->height)};
-  const std::string& model = msg->distortion_model;
-  const std::vector<double>& d = msg->d;
-  bool distorted = false;
-  for (double k : d) distorted = distorted || k != 0;
-  if (distorted) {
-    if (model != "plumb_bob" && !(model == "rational_polynomial" && d.size() >= 8 && d[5] == 0 && d[6] == 0 && d[7] == 0))
-      fail(topic + ": distortion model '" + model + "' is not supported (plumb_bob); give --camera or --no-undistort");
-    for (size_t k = 0; k < 5; ++k) v.push_back(k < d.size() ? d[k] : 0.0);
-  }
-  if (const auto problem = cameraValuesProblem(v)) fail(topic + ": " + *problem + "; give --camera");
-  camera = cameraModelFromValues(v);
-}
-
-cv::Mat BagReader::Impl::decodeColor(const RosImage& m, const std::string& name) const {
-  cv::Mat bgr;
-  if (m.compressed) {
-    bgr = decodeCompressed(m, name, camera.intrinsics);
-  } else {
-    const std::string e = lower(m.encoding);
-    if (e == "rgb8") cv::cvtColor(wrapImage(m, CV_8UC3, name), bgr, cv::COLOR_RGB2BGR);
-    else if (e == "bgr8") bgr = wrapImage(m, CV_8UC3, name);
-    else if (e == "mono8") cv::cvtColor(wrapImage(m, CV_8UC1, name), bgr, cv::COLOR_GRAY2BGR);
-    else if (e == "rgba8") cv::cvtColor(wrapImage(m, CV_8UC4, name), bgr, cv::COLOR_RGBA2BGR);
-    else if (e == "bgra8") cv::cvtColor(wrapImage(m, CV_8UC4, name), bgr, cv::COLOR_BGRA2BGR);
-    else throw InputError(name + ": " + encodingProblem(false, e, Kind::kColor));
-  }
-  checkSize(bgr, name, camera.intrinsics);
-  return bgr;
-}
-
-cv::Mat BagReader::Impl::decodeDepth(const RosImage& m, const std::string& name, double& scale) const {
-  const std::string e = lower(m.encoding);
-  cv::Mat depth;
-  if (m.compressed) {
-    throw InputError(name + ": " + encodingProblem(true, e, Kind::kDepth));
-  } else if (e == "16uc1" || e == "mono16") {
-    depth = wrapImage(m, CV_16UC1, name);
-    scale = options.bag_depth_scale;
-  } else if (e == "32fc1") {
-    depth = wrapImage(m, CV_32FC1, name);
-    // No measurement is 0 in every stage; ROS drivers write NaN (and some +-inf or negatives).
-    depth.forEach<float>([](float& d, const int*) {
-      if (!std::isfinite(d) || d < 0) d = 0;
-    });
-    scale = 1;
-  } else {
-    throw InputError(name + ": " + encodingProblem(false, e, Kind::kDepth));
-  }
-  checkSize(depth, name, camera.intrinsics);
-  return depth;
+  camera = cameraModelFromInfo(*msg, path + ": " + topic);
 }
 
 BagReader::BagReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -350,8 +204,9 @@ BagFrame BagReader::read(size_t i) {
   f.depth_timestamp = d.depth_stamps[di];
   f.name = d.path + ":" + d.color_topic + "#" + std::to_string(ci);
   const std::string depth_name = d.path + ":" + d.depth_topic + "#" + std::to_string(di);
-  f.bgr8 = d.decodeColor(d.recording->image(0, ci), f.name);
-  f.depth = d.decodeDepth(d.recording->image(1, di), depth_name, f.depth_scale);
+  f.bgr8 = decodeRosColor(d.recording->image(0, ci), f.name, d.camera.intrinsics);
+  f.depth = decodeRosDepth(d.recording->image(1, di), depth_name, d.camera.intrinsics, d.options.bag.depth_scale,
+                           f.depth_scale);
   return f;
 }
 

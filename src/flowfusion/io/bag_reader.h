@@ -16,24 +16,15 @@
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/io/ros_images.h"
 #include "flowfusion/io/ros_recording.h"
 #include "flowfusion/io/tum_sequence.h"
 
 namespace ff {
 
-// One associated colour-depth pair as stored in the bag (before any undistortion).
-struct BagFrame {
-  double timestamp = 0;        // s, the colour message's header stamp
-  double depth_timestamp = 0;  // s, the depth message's header stamp
-  cv::Mat bgr8;                // CV_8UC3
-  cv::Mat depth;               // CV_16UC1 raw units (depth_scale per metre) or CV_32FC1 metres
-  double depth_scale = 1;      // raw units per metre of a CV_16UC1 depth; 1 for metres
-  std::string name;            // "BAG:TOPIC#INDEX" of the colour message, for messages
-};
-
 class BagReader {
  public:
-  // Opens the bag, picks the topics (options.rgb_topic/depth_topic, else the known names, else
+  // Opens the bag, picks the topics (options.bag.rgb_topic/depth_topic, else the known names, else
   // the only image topic with / without "depth" in its name), reads the camera (options.camera,
   // else a TUM bag's name rgbd_dataset_freiburgN_*, else CameraInfo beside the colour topic or
   // the bag's only CameraInfo topic) and associates the stamps. Throws InputError naming the bag

@@ -14,29 +14,12 @@ BagSource::BagSource(const std::string& path, const SequenceOptions& options, Fr
                      " is outside the bag's " + std::to_string(n) + " associated frames");
   const CameraModel& camera = reader_.camera();
   if (options.undistort && !camera.distortion.none()) undistorter_.emplace(camera.intrinsics, camera.distortion);
-  if (!options.groundtruth.empty()) groundtruth_ = readTrajectory(options.groundtruth);
+  if (!options.bag.groundtruth.empty()) groundtruth_ = readTrajectory(options.bag.groundtruth);
 }
 
 std::optional<RgbdFrame> BagSource::next() {
   if (next_ > last_) return std::nullopt;
-  BagFrame raw = reader_.read(next_++);
-  cv::Mat color = raw.bgr8, depth = raw.depth;
-  if (undistorter_) {
-    color = undistorter_->undistortColor(color);
-    depth = undistorter_->undistortDepth(depth);  // nearest: the same for raw units and metres
-  }
-  RgbdFrame frame;
-  if (depth.type() == CV_16UC1) {
-    frame = makeRgbdFrame(raw.timestamp, color, depth, raw.depth_scale, raw.name);
-  } else {
-    frame.timestamp = raw.timestamp;
-    frame.color = color;
-    frame.intensity = intensityFromBgr(color);
-    frame.depth = depth;
-    frame.name = raw.name;
-  }
-  frame.depth_timestamp = raw.depth_timestamp;
-  return frame;
+  return rgbdFrameOf(reader_.read(next_++), undistorter_ ? &*undistorter_ : nullptr);
 }
 
 cv::Mat BagSource::toRawPixels(const cv::Mat& image) const {

@@ -1,7 +1,7 @@
 #pragma once
 // A ROS 1 or ROS 2 bag (io/bag_reader.h) as a frame source over a range of its associated frames:
 // undistorted on reading when the camera has lens distortion (as TUM folders are), with the
-// ground truth of options.groundtruth (a TUM groundtruth.txt) when given.
+// ground truth of options.bag.groundtruth (a TUM groundtruth.txt) when given.
 #include <string>
 
 #include "flowfusion/core/undistortion.h"

@@ -10,6 +10,7 @@
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/io/sequence_options.h"
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff {
@@ -53,7 +54,6 @@ struct FrameRange {
 // Throws InputError quoting the text.
 FrameRange parseFrameRange(const std::string& text);
 
-struct SequenceOptions;
 // The source for `path` by what it is: a ROS 1 bag when it ends in .bag, a ROS 2 bag when it is a
 // .mcap or .db3 file or a folder with metadata.yaml (io/bag_source.h), else a
 // TUM-layout folder (io/tum_sequence.h, with the datasets of io/dataset_layout.h). Throws

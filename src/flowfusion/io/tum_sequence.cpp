@@ -72,7 +72,7 @@ TumSequence TumSequence::open(const std::string& dir, const SequenceOptions& opt
   TumSequence s;
   s.dir_ = dir;
   s.options_ = options;
-  checkDepthScale(options.depth_scale, "--depth-scale");
+  checkDepthScale(options.tum.depth_scale, "--depth-scale");
 
   const fs::path root(dir);
   if (!options.camera.empty()) {
@@ -136,7 +136,7 @@ RgbdFrame TumSequence::load(size_t i) const {
     color = undistorter_->undistortColor(color);
     depth = undistorter_->undistortDepth(depth);
   }
-  RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.depth_scale, e.rgb_path);
+  RgbdFrame frame = makeRgbdFrame(e.rgb_timestamp, color, depth, options_.tum.depth_scale, e.rgb_path);
   frame.depth_timestamp = e.depth_timestamp;
   return frame;
 }
@@ -148,7 +148,7 @@ TumWriter::TumWriter(std::string dir, const CameraIntrinsics& camera, double dep
 }
 
 void TumWriter::add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_m, const SE3& T_world_cam,
-                    const cv::Mat& mask) {
+                    const cv::Mat& mask, double depth_timestamp) {
   const std::string name = timestampName(timestamp) + ".png";
   const fs::path root(dir_);
   writePngAtomic((root / "rgb" / name).string(), bgr8, "colour image");
@@ -161,7 +161,7 @@ void TumWriter::add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_
     writePngAtomic((root / "masks" / name).string(), mask, "mask");
   }
   rgb_.emplace_back(timestamp, "rgb/" + name);
-  depth_.emplace_back(timestamp, "depth/" + name);
+  depth_.emplace_back(std::isnan(depth_timestamp) ? timestamp : depth_timestamp, "depth/" + name);
   gt_.push_back({timestamp, T_world_cam});
 }
 

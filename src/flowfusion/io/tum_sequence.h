@@ -3,6 +3,7 @@
 // lines, '#' comments), rgb/ and depth/ PNGs, optional groundtruth.txt, and optionally a
 // camera.txt with the intrinsics and masks/<timestamp>.png with ground-truth dynamic masks
 // (both written by `flowfusion synth` and `flowfusion augment`).
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -12,23 +13,10 @@
 #include "flowfusion/core/output_folder.h"  // prepareOutputDir, for the writers of sequences
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/undistortion.h"
+#include "flowfusion/io/sequence_options.h"
 #include "flowfusion/io/trajectory_io.h"
 
 namespace ff {
-
-struct SequenceOptions {
-  double depth_scale = 5000.0;     // raw depth units per metre (TUM: 5000)
-  double max_time_diff = 0.02;     // s, colour-depth association limit (as the benchmark's associate.py)
-  std::string camera;              // "", "fr1|fr2|fr3" or "fx,fy,cx,cy[...]": overrides detection
-  // Undistort frames as they are loaded when the camera has lens distortion (fr1, fr2 or
-  // coefficients in the spec or camera.txt); false feeds the raw images to the pinhole model.
-  bool undistort = true;
-  // ROS bags (io/bag_source.h): the colour and depth topics ("" = found by name), raw 16UC1 depth
-  // units per metre (ROS drivers: millimetres) and a TUM groundtruth.txt for the recording ("" = none).
-  std::string rgb_topic, depth_topic;
-  double bag_depth_scale = 1000.0;
-  std::string groundtruth;
-};
 
 // Raw 16-bit depth units per metre within what a depth sensor's images can mean (100: centimetres,
 // 1000: millimetres, 5000: TUM, up to 65535, one metre at the 16-bit limit); InputError naming
@@ -89,8 +77,10 @@ void writeCameraFile(const std::string& path, const CameraIntrinsics& camera);
 class TumWriter {
  public:
   TumWriter(std::string dir, const CameraIntrinsics& camera, double depth_scale = 5000.0);
+  // depth_timestamp: when the depth was taken, listed in depth.txt (NaN: with the colour, at
+  // `timestamp`); the files are named after `timestamp` either way.
   void add(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth_m, const SE3& T_world_cam,
-           const cv::Mat& mask = {});
+           const cv::Mat& mask = {}, double depth_timestamp = std::numeric_limits<double>::quiet_NaN());
   // Writes rgb.txt, depth.txt, groundtruth.txt and camera.txt.
   void finish(const std::string& source_comment);
 

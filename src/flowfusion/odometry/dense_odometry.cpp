@@ -491,9 +491,31 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
   return result;
 }
 
+namespace {
+
+// The smallest |z - qz| over the valid depths z of `depth` within `window` pixels of the 2x2
+// block at (x0, y0), starting from `residual` (the bilinear one).
+float nearestDepthResidual(const cv::Mat& depth, int x0, int y0, float qz, int window, float residual) {
+  for (int y = std::max(0, y0 - window); y <= std::min(depth.rows - 1, y0 + 1 + window); ++y) {
+    const float* d = depth.ptr<float>(y);
+    for (int x = std::max(0, x0 - window); x <= std::min(depth.cols - 1, x0 + 1 + window); ++x)
+      if (d[x] > 0) residual = std::min(residual, std::abs(d[x] - qz));
+  }
+  return residual;
+}
+
+}  // namespace
+
+int depthOffsetPx(const SE3& T_prev_cur, double dt_s, double fx_px, double depth_m, double offset_s, int max_px) {
+  if (!(dt_s > 0) || !(depth_m > 0)) return 0;
+  const double angle_rad = rotationAngleDeg(T_prev_cur) * M_PI / 180.0;
+  const double px_per_s = fx_px * (angle_rad + translationNorm(T_prev_cur) / depth_m) / dt_s;
+  return static_cast<int>(std::min<double>(max_px, std::lround(px_per_s * offset_s)));
+}
+
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& c,
-                                     const cv::Mat& target_weights, int mover_margin_px) {
+                                     const cv::Mat& target_weights, int mover_margin_px, int depth_window_px) {
   const PyramidLevel& A = source.level(level);
   const PyramidLevel& B = target.level(level);
   cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
@@ -535,7 +557,10 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
           continue;
         }
         oI[x] = std::abs(bilinear(target_images.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]);
-        if (zB > 0) oD[x] = std::abs(zB - w.qz);
+        if (zB > 0) {
+          oD[x] = std::abs(zB - w.qz);
+          if (depth_window_px > 0) oD[x] = nearestDepthResidual(B.depth, w.x0, w.y0, w.qz, depth_window_px, oD[x]);
+        }
       }
     }
   });

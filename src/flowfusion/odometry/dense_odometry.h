@@ -99,15 +99,26 @@ class DenseOdometry {
 // target, or lands where target_weights is below 0.5 (a moving object there, not evidence of this
 // pixel's motion) or within mover_margin_px pixels (at `level`) of such a place: a mask's outline
 // is uncertain by about a pixel, and a surface landing just beside it would be compared with what
-// lies behind the mover.
+// lies behind the mover. With depth_window_px > 0, |r_D| is the smallest depth difference to the
+// target's valid depths within that many pixels (at `level`) of where the pixel lands: a depth
+// image out of step with its colour image (taken up to 20 ms apart, rolling shutter) puts a thin
+// structure's depth edge a few pixels away under fast rotation, where the plain residual compares
+// it with the background behind it.
 struct PixelResiduals {
   cv::Mat abs_intensity;    // CV_32F
   cv::Mat abs_depth;        // CV_32F
   cv::Mat on_target_mover;  // CV_32F: 1 where the pixel lands in view, not hidden, on such a
                             // moving object of the target (compared with nothing), else 0
 };
+// The pixels (of a camera with focal length fx_px) by which a static surface's depth edge may lie
+// off its colour edge when the depth is taken up to offset_s seconds apart from the colour: the
+// image motion of the camera motion T_prev_cur over dt_s seconds (rotation, and translation at
+// depth_m metres) scaled to offset_s, rounded, at most max_px; 0 for dt_s <= 0.
+int depthOffsetPx(const SE3& T_prev_cur, double dt_s, double fx_px, double depth_m, double offset_s, int max_px);
+
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& config,
-                                     const cv::Mat& target_weights = {}, int mover_margin_px = 0);
+                                     const cv::Mat& target_weights = {}, int mover_margin_px = 0,
+                                     int depth_window_px = 0);
 
 }  // namespace ff

@@ -2,7 +2,8 @@
 // Where results go: the seam between the system and files, a report, a viewer, a publisher or a
 // test probe (in the manner of Kimera-VIO's output callbacks). runSequence calls every sink it is
 // given, in order: begin() once, frame() after each processed frame, end() once, also when the
-// run stops early (then RunSummary::complete is false and says why).
+// run stops early (then RunSummary::complete is false and says why). Each call hands over values:
+// the run's setting, a frame and its result, and at the end the summary and the static map.
 #include <optional>
 #include <string>
 #include <vector>
@@ -72,8 +73,9 @@ class ResultSink {
   virtual ~ResultSink() = default;
   virtual void begin(const RunInfo& info) {}
   virtual void frame(const RgbdFrame& frame, const FrameResult& result) {}
-  // The system holds the trajectory and the map; a sink adds what it wrote to summary.written.
-  virtual void end(RunSummary& summary, const FlowFusionSystem& system) {}
+  // summary: the run's figures and trajectory; map: the static map after the last frame's fusion
+  // (null when the system fused nothing). A sink adds what it wrote to summary.written.
+  virtual void end(RunSummary& summary, const StaticMap* map) {}
 };
 
 }  // namespace ff

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "flowfusion/core/timings.h"
-#include "flowfusion/eval/bench_utils.h"
+#include "flowfusion/core/process_memory.h"
 #include "flowfusion/io/prefetching_source.h"
 
 namespace ff {
@@ -47,6 +47,28 @@ nlohmann::json toJson(const RunSummary& summary) {
   }
   j["notes"] = summary.notes;
   return j;
+}
+
+void summariseSystem(RunSummary& s, const FlowFusionSystem& system, long summed_rounds) {
+  if (s.frames > 0) s.mean_rounds = static_cast<double>(summed_rounds) / static_cast<double>(s.frames);
+  s.tracked_trajectory = system.trajectory();
+  s.trajectory = system.closedTrajectory();
+  s.loop_closure = system.loopClosureActive();
+  s.loop_closures = system.loopClosures();
+  s.loop_corrections = system.loopCorrections();
+  s.slam_keyframes = system.slamKeyframes();
+  s.lost_frames = system.lostFrames();
+  s.relocalized_frames = system.relocalizedFrames();
+  if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
+  s.tracking_failures = system.trackingFailures();
+  s.flow_restarts = system.flowRestarts();
+  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
+  s.timings = system.timings();
+  if (const StaticMap* map = system.map()) {
+    s.map_surfels = map->size();
+    s.map_budget_reached = map->budgetReached();
+  }
+  s.peak_memory_mib = peakResidentMiB();
 }
 
 namespace {
@@ -104,37 +126,21 @@ class LiveMeter {
   LiveFigures figures_;
 };
 
-void summarise(RunSummary& s, FlowFusionSystem& system, const std::vector<double>& load_ms,
+// The summary of runSequence's loop: the system's figures, the read time and a live run's figures.
+void summarise(RunSummary& s, FlowFusionSystem& system, long summed_rounds, const std::vector<double>& load_ms,
                std::optional<LiveMeter>& live) {
   if (live) {
     live->finish();
     s.live = live->figures();
   }
-  if (s.frames > 0) s.mean_rounds /= static_cast<double>(s.frames);
   system.finishLoopClosure();
-  s.tracked_trajectory = system.trajectory();
-  s.trajectory = system.closedTrajectory();
-  s.loop_closure = system.loopClosureActive();
-  s.loop_closures = system.loopClosures();
-  s.loop_corrections = system.loopCorrections();
-  s.slam_keyframes = system.slamKeyframes();
-  s.lost_frames = system.lostFrames();
-  s.relocalized_frames = system.relocalizedFrames();
-  if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
-  s.tracking_failures = system.trackingFailures();
-  s.flow_restarts = system.flowRestarts();
+  summariseSystem(s, system, summed_rounds);
   s.load_ms_median = median(load_ms);
-  if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
-  s.timings = system.timings();
-  if (const StaticMap* map = system.map()) {
-    s.map_surfels = map->size();
-    s.map_budget_reached = map->budgetReached();
-  }
-  s.peak_memory_mib = eval::peakResidentMiB();
 }
 
 void endSinks(const std::vector<ResultSink*>& sinks, RunSummary& s, const FlowFusionSystem& system) {
-  for (ResultSink* sink : sinks) sink->end(s, system);
+  const StaticMap* map = system.map();
+  for (ResultSink* sink : sinks) sink->end(s, map);
 }
 
 }  // namespace
@@ -153,6 +159,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
   std::vector<double> load_ms;
   std::unique_ptr<FlowFusionSystem> system;
   RunSummary summary;
+  long summed_rounds = 0;  // FrameResult::iterations over the frames
   try {
     for (std::optional<RgbdFrame> frame = nextFrame(frames, load_ms); frame; frame = nextFrame(frames, load_ms)) {
       if (control.stop && control.stop->load()) {
@@ -167,13 +174,14 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       if (live) live->processed();
       for (ResultSink* sink : sinks) sink->frame(*frame, r);
       ++summary.frames;
-      summary.mean_rounds += r.iterations;
+      summed_rounds += r.iterations;
+      if (control.after_frame) control.after_frame(*system);
     }
   } catch (const std::exception& e) {
     summary.complete = false;
     summary.stop_reason = e.what();
     if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-    summarise(summary, *system, load_ms, live);
+    summarise(summary, *system, summed_rounds, load_ms, live);
     try {
       endSinks(sinks, summary, *system);
     } catch (const std::exception&) {
@@ -182,7 +190,7 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
     throw;
   }
   if (!system) system = std::make_unique<FlowFusionSystem>(config, source.camera());
-  summarise(summary, *system, load_ms, live);
+  summarise(summary, *system, summed_rounds, load_ms, live);
   endSinks(sinks, summary, *system);
   return summary;
 }

@@ -15,6 +15,16 @@ namespace ff {
 
 namespace {
 
+// The median of the clusters' mean depths, metres (0 without a cluster with depth).
+double medianClusterDepth(const ClusterGraph& graph) {
+  std::vector<float> depths;
+  for (const float d : graph.mean_depth)
+    if (d > 0) depths.push_back(d);
+  if (depths.empty()) return 0;
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  return depths[depths.size() / 2];
+}
+
 OdometryConfig refineConfig(const SystemConfig& c) {
   OdometryConfig o = c.odometry;
   o.max_iterations = o.max_iterations_finest = c.pipeline.refine_iterations;
@@ -191,19 +201,28 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     if (res.prior.empty()) res.prior = cv::Mat(estimate.flow_mover.size(), CV_32F, std::numeric_limits<float>::quiet_NaN());
     res.prior.setTo(1.f, estimate.flow_mover > 0);
   }
+  const double dt_s = in.frame.timestamp - in.previous.frame.timestamp;
+  // How far apart the depth may be taken from the colour: their stamps, and the allowance.
+  const double stamps_s =
+      std::isnan(in.frame.depth_timestamp) ? 0.0 : std::abs(in.frame.timestamp - in.frame.depth_timestamp);
+  const double depth_offset_s = stamps_s + config_.scores.depth_offset_ms / 1000;
+  const double depth_m = medianClusterDepth(graph);
   DynamicScores scores;
   for (int round = 0; round < opt.max_iterations; ++round) {
     if (round > 0 && std::chrono::steady_clock::now() > in.deadline) break;
     {
       StageTimer timer(timings, "scores");
+      const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
+      const int depth_window_px = depthOffsetPx(T_prev_cur, dt_s, seg_camera_.fx, depth_m, depth_offset_s,
+                                                config_.scores.depth_window_px);
       const PixelResiduals pr = computePixelResiduals(in.cur, *in.target.odo, estimate.T_target_cur, level,
                                                       config_.odometry, *in.target.weights,
-                                                      config_.scores.target_mover_margin_px);
+                                                      config_.scores.target_mover_margin_px, depth_window_px);
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
       res.r_F = relativeToFrameError(
-          flowResidualAt(seg_flow, in.cur, in.T_target_prev.inverse() * estimate.T_target_cur),
+          flowResidualAt(seg_flow, in.cur, T_prev_cur),
           config_.scores.flow_error_px);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);

@@ -1,103 +1,15 @@
 #pragma once
 // Cluster residuals and dynamic scores (paper Eqs. 10-15; docs/design.md).
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <utility>
 #include <vector>
 
-#include "flowfusion/core/config_enum.h"
 #include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/score_config.h"
+#include "flowfusion/segmentation/score_evidence.h"
 
 namespace ff {
-
-// Which of Eq. 10's terms can start a group's motion for model_needs_motion (docs/tuning.md#model_motion_cue).
-enum class ModelMotionCue {
-  kAnyTerm,  // delta (r_I, r_D and r_F together) above model_motion_delta
-  kFlow,     // the flow term alone starts it; delta keeps a group moving that the memory holds
-};
-FLOWFUSION_CONFIG_ENUM(ModelMotionCue, "scores.model_motion_cue", {ModelMotionCue::kAnyTerm, "any_term"},
-                       {ModelMotionCue::kFlow, "flow"})
-
-// The defaults and the measurements behind them: docs/tuning.md#scores.
-struct ScoreConfig {
-  // Weights of Eq. 10, the paper's TUM values (Table III). Units: r_I in grey levels (0 to 1),
-  // r_D / D_i dimensionless, r_F in pixels of the VGA image.
-  double alpha_I = 0.9;
-  double alpha_F = 0.022;
-  // Thresholds of g (Eq. 13) on a cluster's delta: below theta_b static, above theta_t dynamic
-  // (docs/tuning.md#theta).
-  double theta_b = 0.1;
-  double theta_t = 0.3;
-  // Weight of the smoothness term E_G (Eq. 15); 1 = the paper (docs/tuning.md#lambda_g).
-  double lambda_G = 1.0;
-  // Factor on lambda_G for the edges between clusters whose mean depths differ by at most
-  // body_depth_ratio of the nearer one (our extension; 1 = the paper): the parts of one body (a
-  // stance leg, a head beside a moving torso) follow each other more than a body follows the
-  // background it stands in front of (docs/tuning.md#body_smoothing).
-  double body_smoothing = 2.0;
-  double body_depth_ratio = 0.1;  // fraction of the depth
-  // Weight of the static-model occlusion term added to Eq. 10 (our extension; 0 = the paper): how
-  // far the cluster lies in front of the static map, metres over D_i (docs/tuning.md#alpha_m).
-  // It flags a whole object in front of the mapped background, not only its moving edges.
-  double alpha_M = 3.0;
-  // Depth differences below model_margin * depth are not occlusion (sensor noise, map blur).
-  double model_margin = 0.03;
-  // A group of clusters that the model term makes dynamic keeps the term only if one of them has
-  // motion evidence: a static surface flagged once would otherwise never be fused.
-  bool model_needs_motion = true;
-  // That motion evidence: Eq. 10's delta above this in one cluster of the group, between theta_b
-  // and theta_t (docs/tuning.md#model_motion_delta).
-  double model_motion_delta = 0.15;
-  // What may show that motion first. Against a target built from the map (a model keyframe) r_D
-  // compares the depth with the map's surfaces, so a static surface the map lacks (come into view,
-  // or flagged once) has a depth residual and a model occlusion term at once, each confirming the
-  // other in every frame (real fr1/rpy): there the flow, an independent cue, starts a group's
-  // motion and its memory, and the depth keeps a remembered group moving (a person who sat down
-  // stays dynamic). Against a plain frame (ResidualImages::r_D_from_map false) any term starts it.
-  ModelMotionCue model_motion_cue = ModelMotionCue::kFlow;
-  // Static evidence (our extension): a cluster agreeing with the stable map over a fraction a of
-  // its pixels has its motion delta scaled by (1 - model_agreement * a) (docs/tuning.md#agreement).
-  double model_agreement = 1.0;
-  // Depth differences below agreement_margin * depth agree with the map (tighter than model_margin).
-  double agreement_margin = 0.01;
-  // Grey levels: a larger intensity difference from the map's front surfel disagrees whatever the
-  // depth (a textured face sliding along its own plane); at 1 the depth decides alone.
-  double agreement_intensity = 0.2;
-  // lambda_T (our extension; 0 = the paper): lambda_T sum_i (b_i - p_i)^2 is added to E(b), p_i the
-  // previous scores carried along the motion (docs/tuning.md#temporal_prior).
-  double temporal_prior = 0.5;
-  // Seconds (our extension; 0 = off): a region that belonged to a moving group of clusters within
-  // this time counts as moving for model_needs_motion, so a person who stops (stands, sits) in
-  // front of the mapped background stays dynamic while they cover it. Only motion in two frames in
-  // a row is remembered, so a static surface flagged once is not, one flagged longer is released
-  // after this time (MotionMemory, docs/tuning.md#model_memory_s).
-  double model_memory_s = 2.0;
-  // Fraction (our extension; 0 = off): a cluster with at least this share of its pixels landing on
-  // the target's own movers (residuals.on_target_mover) was compared with nothing there, and a
-  // small flow residual alone (the inside of a slow or turning mover) is no evidence that it
-  // stands still: its neighbours and its carried score decide, unless its delta reaches theta_t
-  // or it agrees with the map (docs/tuning.md#target_mover_share).
-  double target_mover_share = 0.5;
-  // Pixels (at the segmentation level; our extension, 0 = off): a pixel landing this close to the
-  // target's movers counts as landing on them (computePixelResiduals' mover_margin_px). A static
-  // object scored dynamic in a keyframe keeps its own depth there; its edge, landing just outside
-  // that mask, would show the depth of the map behind it as motion and keep it dynamic
-  // (docs/tuning.md#target_mover_margin_px).
-  int target_mover_margin_px = 1;
-  // Pixels of the VGA image (our extension; 0 = off): when the median flow residual over the frame
-  // exceeds this, the flow failed on the frame as a whole (real motion blur, a large rotation the
-  // flow did not follow), and r_F is scaled by this over the median (relativeToFrameError), so only
-  // what stands out from the frame's own error counts (docs/tuning.md#flow_error_px).
-  double flow_error_px = 2.0;
-};
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
-                                                body_smoothing, body_depth_ratio, alpha_M, model_margin,
-                                                model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
-                                                agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
-                                                target_mover_share, target_mover_margin_px, flow_error_px)
-// Throws InputError naming the first bad setting.
-void validate(const ScoreConfig& config);
 
 // Per-pixel residuals of A, CV_32F, same size as the cluster labels; NaN = invalid (skipped).
 // An empty image leaves its term out of Eq. 10.
@@ -128,16 +40,12 @@ struct DynamicScores {
 double scoreTarget(double delta, double theta_b, double theta_t);
 double scoreWeight(double delta, double theta_b, double theta_t);
 
-// delta_i = [alpha_I mean(r_I) + mean(r_D) / D_i + alpha_F mean(r_F)] (1 - model_agreement mean(a_M))
-//           (+ alpha_M mean(r_M) / D_i) over cluster i's pixels
-// (Eq. 10 normalised by size; each mean over the pixels where that residual is valid, so one
-// missing term does not drop the others), then b from solveScoreEnergy, with p_i the cluster's mean
-// of residuals.prior where it is given (ScoreConfig::temporal_prior), lambda_G scaled on the edges
-// within a body (ScoreConfig::body_smoothing). A group with a cluster whose residuals.memory
-// averages >= 0.5 keeps its model term as if it moved (ScoreConfig::model_memory_s). A cluster
-// mostly on the target's movers with a delta below theta_t (and not agreeing with the map) counts
-// as one without evidence (ScoreConfig::target_mover_share). Throws
-// InputError on mismatched sizes/types or invalid thresholds.
+// Eqs. 10-15 assembled from the evidence units of score_evidence.h: per cluster, delta = the
+// motion terms times the static agreement factor, plus the model occlusion term; no evidence (NaN)
+// where no residual is valid or where the cluster was compared with nothing and its delta stays
+// below theta_t; b from solveScoreEnergy with the carried prior and body smoothing; then the model
+// term dropped from the groups that neither move nor are remembered (model_needs_motion) and b
+// solved again. Throws InputError on mismatched sizes/types or invalid thresholds.
 DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImages& residuals,
                                    const ScoreConfig& config);
 
@@ -152,17 +60,6 @@ Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::ve
                                  double theta_b, double theta_t, double lambda_G,
                                  const std::vector<double>& prior = {}, double lambda_T = 0.0,
                                  const std::vector<double>& edge_scale = {});
-
-// r_M per pixel: max(0, model_depth - depth - margin * depth), metres, CV_32F; NaN where either
-// depth is missing. Both CV_32FC1 of one size (throws InputError otherwise).
-cv::Mat modelOcclusion(const cv::Mat& depth, const cv::Mat& model_depth, double margin);
-
-// 1 where |model_depth - depth| <= margin * depth, 0 where not, NaN where either depth is
-// missing (CV_32F). With intensities (CV_32FC1 in [0, 1], the depth's size), also 0 where
-// |model_intensity - intensity| > intensity_margin. All CV_32FC1 of one size (throws InputError
-// otherwise).
-cv::Mat modelAgreement(const cv::Mat& depth, const cv::Mat& model_depth, double margin, const cv::Mat& intensity = {},
-                       const cv::Mat& model_intensity = {}, double intensity_margin = 1.0);
 
 // b per pixel of A (CV_32F), 0 where no cluster.
 cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores);

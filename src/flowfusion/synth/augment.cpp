@@ -46,23 +46,16 @@ void addPeople(SceneModel& model, const AugmentConfig& config, const SE3& T_worl
   }
 }
 
-}  // namespace
-
-AugmentReport augmentSequence(const std::string& static_dir, const std::string& out_dir,
-                              const AugmentConfig& config, const SequenceOptions& options, bool overwrite) {
-  validate(config);
-  if (!std::filesystem::is_directory(static_dir)) throw InputError(static_dir + ": no such folder");
-  const TumSequence seq = TumSequence::open(static_dir, options);
-  if (!seq.groundtruth())
-    throw InputError(static_dir + ": no groundtruth.txt; augment needs the ground-truth camera poses");
+// The frames first_frame..last_frame with a ground-truth pose (index, T_world_cam); the others'
+// timestamps into report.dropped_timestamps. InputError naming the folder when the range is empty.
+std::vector<std::pair<int, SE3>> posedFrames(const TumSequence& seq, const AugmentConfig& config,
+                                             const std::string& static_dir, AugmentReport& report) {
   const int n = static_cast<int>(seq.size());
   const int last = config.last_frame < 0 ? n - 1 : config.last_frame;
   if (config.first_frame >= n || last >= n || last < config.first_frame)
     throw InputError(static_dir + ": frame range " + std::to_string(config.first_frame) + ":" +
                      std::to_string(config.last_frame) + " is empty or outside the " + std::to_string(n) +
                      " associated frames");
-
-  AugmentReport report;
   std::vector<std::pair<int, SE3>> kept;
   for (int i = config.first_frame; i <= last; ++i) {
     SE3 T;
@@ -75,11 +68,12 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
   if (kept.empty())
     throw InputError(static_dir + ": none of the colour frames " + std::to_string(config.first_frame) + ".." +
                      std::to_string(last) + " has a ground-truth pose (groundtruth.txt does not cover them)");
-  prepareOutputDir(out_dir, overwrite);
+  return kept;
+}
 
-  const CameraIntrinsics& camera = seq.camera();
-  const SE3 T_world_cam0 = kept.front().second;
-  const double t0 = seq.entry(kept.front().first).rgb_timestamp;
+// The boxes (some L-shaped pairs) crossing the first camera's view, the people, and a light.
+SceneModel augmentModel(const AugmentConfig& config, const CameraIntrinsics& camera, const SE3& T_world_cam0,
+                        double duration_s) {
   SceneModel model;
   Rng rng(hashCombine(config.seed, kAugmentStream));
   const double tan_x = 0.5 * camera.width / camera.fx, tan_y = 0.5 * camera.height / camera.fy;
@@ -101,48 +95,45 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
     obj.path = path;
     model.objects.push_back(std::move(obj));
   }
-  addPeople(model, config, T_world_cam0, seq.entry(kept.back().first).rgb_timestamp - t0);
+  addPeople(model, config, T_world_cam0, duration_s);
   // A light above and behind the first camera, so the objects are lit roughly like the room.
   model.light.position = T_world_cam0 * Eigen::Vector3d(0.5, -2.0, -0.5);
   model.light.ambient = 0.45;
   model.light.diffuse = 0.8;
+  return model;
+}
 
-  RenderOptions opt;
-  opt.camera = camera;
-  opt.noise = config.noise;
-  opt.depth_shadows = false;  // the real background carries its own shadows
-  opt.psf_sigma_px = 0;       // edges are blended after compositing
+// A real frame with the rendered objects pasted where they are in front of the real depth.
+struct Composite {
+  cv::Mat color, depth;
+  cv::Mat mask;  // CV_8U, 255 = a pasted (moving) pixel
+};
 
-  TumWriter writer(out_dir, camera);
-  for (const auto& [index, T_world_cam] : kept) {
-    const RgbdFrame real = seq.load(index);
-    const double t = real.timestamp;
-    opt.noise_key = hashCombine(hashCombine(config.seed, kAugmentNoise), static_cast<uint64_t>(std::llround(t * 1e6)));
-    const RenderedLayer layer = model.cast(T_world_cam, t - t0, camera);
-    const cv::Mat obj_color = finishColor(layer.color, opt);
-    const cv::Mat obj_depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
-    cv::Mat color = real.color.clone(), depth = real.depth.clone();
-    cv::Mat mask(camera.height, camera.width, CV_8U, cv::Scalar(0));
-    for (int v = 0; v < camera.height; ++v)
-      for (int u = 0; u < camera.width; ++u) {
-        if (!layer.object_id.at<uint8_t>(v, u)) continue;
-        const float z_real = real.depth.at<float>(v, u);
-        if (z_real > 0 && layer.depth_clean.at<float>(v, u) >= z_real) continue;
-        mask.at<uint8_t>(v, u) = 255;
-        color.at<cv::Vec3b>(v, u) = obj_color.at<cv::Vec3b>(v, u);
-        depth.at<float>(v, u) = obj_depth.at<float>(v, u);
-      }
-    // Soften the pasted edges as the real camera's blur would (colour only; depth and mask stay exact).
-    cv::Mat band, dil, ero, soft;
-    cv::dilate(mask, dil, cv::Mat());
-    cv::erode(mask, ero, cv::Mat());
-    cv::subtract(dil, ero, band);
-    cv::GaussianBlur(color, soft, cv::Size(0, 0), 0.6);
-    soft.copyTo(color, band);
-    writer.add(t, color, depth, T_world_cam, mask);
-  }
-  writer.finish("flowfusion augment of " + static_dir + ", seed " + std::to_string(config.seed) +
-                ", generator version " + std::to_string(kGeneratorVersion));
+Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt) {
+  const cv::Mat obj_color = finishColor(layer.color, opt);
+  const cv::Mat obj_depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
+  Composite c{real.color.clone(), real.depth.clone(), cv::Mat(real.depth.rows, real.depth.cols, CV_8U, cv::Scalar(0))};
+  for (int v = 0; v < c.mask.rows; ++v)
+    for (int u = 0; u < c.mask.cols; ++u) {
+      if (!layer.object_id.at<uint8_t>(v, u)) continue;
+      const float z_real = real.depth.at<float>(v, u);
+      if (z_real > 0 && layer.depth_clean.at<float>(v, u) >= z_real) continue;
+      c.mask.at<uint8_t>(v, u) = 255;
+      c.color.at<cv::Vec3b>(v, u) = obj_color.at<cv::Vec3b>(v, u);
+      c.depth.at<float>(v, u) = obj_depth.at<float>(v, u);
+    }
+  // Soften the pasted edges as the real camera's blur would (colour only; depth and mask stay exact).
+  cv::Mat band, dil, ero, soft;
+  cv::dilate(c.mask, dil, cv::Mat());
+  cv::erode(c.mask, ero, cv::Mat());
+  cv::subtract(dil, ero, band);
+  cv::GaussianBlur(c.color, soft, cv::Size(0, 0), 0.6);
+  soft.copyTo(c.color, band);
+  return c;
+}
+
+void writeSceneJson(const std::string& out_dir, const std::string& static_dir, const AugmentConfig& config,
+                    const AugmentReport& report, const SceneModel& model) {
   nlohmann::json j;
   j["generator"] = "flowfusion augment";
   j["generator_version"] = kGeneratorVersion;
@@ -159,6 +150,44 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
     j["objects"].push_back(oj);
   }
   writeJsonFile((std::filesystem::path(out_dir) / "scene.json").string(), j);
+}
+
+}  // namespace
+
+AugmentReport augmentSequence(const std::string& static_dir, const std::string& out_dir,
+                              const AugmentConfig& config, const SequenceOptions& options, bool overwrite) {
+  validate(config);
+  if (!std::filesystem::is_directory(static_dir)) throw InputError(static_dir + ": no such folder");
+  const TumSequence seq = TumSequence::open(static_dir, options);
+  if (!seq.groundtruth())
+    throw InputError(static_dir + ": no groundtruth.txt; augment needs the ground-truth camera poses");
+  AugmentReport report;
+  const std::vector<std::pair<int, SE3>> kept = posedFrames(seq, config, static_dir, report);
+  prepareOutputDir(out_dir, overwrite);
+
+  const CameraIntrinsics& camera = seq.camera();
+  const SE3 T_world_cam0 = kept.front().second;
+  const double t0 = seq.entry(kept.front().first).rgb_timestamp;
+  const SceneModel model =
+      augmentModel(config, camera, T_world_cam0, seq.entry(kept.back().first).rgb_timestamp - t0);
+  RenderOptions opt;
+  opt.camera = camera;
+  opt.noise = config.noise;
+  opt.depth_shadows = false;  // the real background carries its own shadows
+  opt.psf_sigma_px = 0;       // edges are blended after compositing
+
+  TumWriter writer(out_dir, camera);
+  for (const auto& [index, T_world_cam] : kept) {
+    const RgbdFrame real = seq.load(index);
+    const double t = real.timestamp;
+    opt.noise_key = hashCombine(hashCombine(config.seed, kAugmentNoise), static_cast<uint64_t>(std::llround(t * 1e6)));
+    const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt);
+    // The real depth keeps its own time: out of step with the colour, as the sensor took it.
+    writer.add(t, c.color, c.depth, T_world_cam, c.mask, real.depth_timestamp);
+  }
+  writer.finish("flowfusion augment of " + static_dir + ", seed " + std::to_string(config.seed) +
+                ", generator version " + std::to_string(kGeneratorVersion));
+  writeSceneJson(out_dir, static_dir, config, report, model);
   report.frames_written = static_cast<int>(kept.size());
   return report;
 }

@@ -299,6 +299,97 @@ cv::Vec3f shadeHit(const SceneModel& m, const Part& part, const Ray& ray_w, doub
   return albedo * static_cast<float>(shade);
 }
 
+// A moving object at one instant, as the camera's rays see it.
+struct PosedObject {
+  Eigen::Matrix3d R_oc;  // camera ray directions into the object frame
+  Eigen::Matrix3d R_wo;
+  Eigen::Vector3d o_o;   // camera centre in the object frame
+};
+
+std::vector<PosedObject> posedObjects(const std::vector<MovingObject>& objects, const SE3& T_world_cam, double time_s) {
+  const Eigen::Matrix3d R_wc = T_world_cam.linear();
+  const Eigen::Vector3d o_w = T_world_cam.translation();
+  std::vector<PosedObject> posed;
+  for (const MovingObject& obj : objects) {
+    const SE3 T_wo = obj.path->T_world_object(time_s);
+    const Eigen::Matrix3d R_ow = T_wo.linear().transpose();
+    posed.push_back({R_ow * R_wc, T_wo.linear(), R_ow * (o_w - T_wo.translation())});
+  }
+  return posed;
+}
+
+// Inside the room a ray leaves through the nearest far face: that face into hit.
+void castRoom(const Room& room, const Ray& ray_w, Hit& hit) {
+  double t_far = kInf;
+  int room_face = -1;
+  for (int i = 0; i < 3; ++i) {
+    const double b = ((ray_w.d[i] > 0 ? room.size[i] : 0.0) - ray_w.o[i]) * ray_w.inv[i];
+    if (b < t_far) {
+      t_far = b;
+      room_face = 2 * i + (ray_w.d[i] > 0 ? 1 : 0);
+    }
+  }
+  if (t_far > 0) {
+    hit.t = t_far;
+    hit.axis = room_face / 2;
+    hit.part = &room.faces[room_face];
+  }
+}
+
+// One pixel of a RenderedLayer (all 0 where the ray hits nothing).
+struct PixelSample {
+  cv::Vec3f color = cv::Vec3f(0, 0, 0);
+  float depth = 0;
+  uint8_t object_id = 0;
+  float cos_incidence = 0;
+};
+
+// The camera's view of a tile: what its pixels' rays test (the items and objects whose screen
+// rectangles overlap the tile) and the camera's pose.
+struct TileView {
+  const SceneModel& model;
+  const std::vector<PosedObject>& posed;
+  const std::vector<const Item*>& items;
+  const std::vector<int>& objects;
+  Eigen::Matrix3d R_wc;
+  Eigen::Vector3d o_w;
+  double pixel_angle;  // radians one pixel subtends, for texture filtering
+};
+
+// The ray along camera direction d_c (unnormalised, z = 1, so that the ray parameter t is the
+// depth of the hit) through the room, the tile's furniture and objects, shaded.
+PixelSample castPixel(const TileView& view, const Eigen::Vector3d& d_c) {
+  const SceneModel& m = view.model;
+  const Ray ray_w(view.o_w, view.R_wc * d_c);
+  Hit hit;
+  if (m.room) castRoom(*m.room, ray_w, hit);
+  for (const Item* item : view.items) castItem(*item, ray_w, hit, -1);
+  Eigen::Vector3d p_local;
+  for (int k : view.objects) {
+    const Ray ray_o(view.posed[k].o_o, view.posed[k].R_oc * d_c);
+    const Part* before = hit.part;
+    castItem(m.objects[k].shape, ray_o, hit, k);
+    if (hit.part != before) p_local = ray_o.o + hit.t * ray_o.d;
+  }
+  if (!hit.part) return {};
+  const Eigen::Vector3d p_w = view.o_w + hit.t * ray_w.d;
+  Eigen::Vector3d n_w = Eigen::Vector3d::Zero();
+  Eigen::Vector2d uv;
+  if (hit.object >= 0) {
+    Eigen::Vector3d n_o = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d d_o = view.posed[hit.object].R_oc * d_c;
+    n_o[hit.axis] = d_o[hit.axis] > 0 ? -1.0 : 1.0;
+    n_w = view.posed[hit.object].R_wo * n_o;
+    uv = faceUv(p_local, hit.axis);
+  } else {
+    n_w[hit.axis] = ray_w.d[hit.axis] > 0 ? -1.0 : 1.0;
+    uv = faceUv(p_w, hit.axis);
+  }
+  const double cos_i = std::fabs(n_w.dot(ray_w.d)) / ray_w.d.norm();
+  return {shadeHit(m, *hit.part, ray_w, hit.t, p_w, n_w, uv, cos_i, view.pixel_angle), static_cast<float>(hit.t),
+          static_cast<uint8_t>(hit.object + 1), static_cast<float>(cos_i)};
+}
+
 }  // namespace
 
 RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const CameraIntrinsics& camera) const {
@@ -308,22 +399,7 @@ RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const Came
   out.depth_clean.create(H, W, CV_32F);
   out.object_id.create(H, W, CV_8U);
   out.cos_incidence.create(H, W, CV_32F);
-
-  const Eigen::Matrix3d R_wc = T_world_cam.linear();
-  const Eigen::Vector3d o_w = T_world_cam.translation();
-  struct Posed {
-    Eigen::Matrix3d R_oc;  // camera ray directions into the object frame
-    Eigen::Matrix3d R_wo;
-    Eigen::Vector3d o_o;   // camera centre in the object frame
-  };
-  std::vector<Posed> posed;
-  for (const MovingObject& obj : objects) {
-    const SE3 T_wo = obj.path->T_world_object(time_s);
-    const Eigen::Matrix3d R_ow = T_wo.linear().transpose();
-    posed.push_back({R_ow * R_wc, T_wo.linear(), R_ow * (o_w - T_wo.translation())});
-  }
-  // Pixel footprint for texture filtering: angle subtended by one pixel (radians).
-  const double pixel_angle = 2.0 / (camera.fx + camera.fy);
+  const std::vector<PosedObject> posed = posedObjects(objects, T_world_cam, time_s);
 
   // Screen-space culling: each item's bounds projected to a pixel rectangle (the whole image when
   // a corner is near or behind the camera); every tile of rows x columns tests only the items
@@ -340,78 +416,27 @@ RenderedLayer SceneModel::cast(const SE3& T_world_cam, double time_s, const Came
   cv::parallel_for_(cv::Range(0, tiles_y), [&](const cv::Range& tile_rows) {
     std::vector<const Item*> items;
     std::vector<int> objs;
+    const TileView view{*this, posed, items, objs, T_world_cam.linear(), T_world_cam.translation(),
+                        2.0 / (camera.fx + camera.fy)};
     for (int ty = tile_rows.start; ty < tile_rows.end; ++ty)
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      const cv::Rect2d tile(tx * kTile, ty * kTile, kTile, kTile);
-      items.clear();
-      objs.clear();
-      for (size_t i = 0; i < furniture.size(); ++i)
-        if ((furniture_rect[i] & tile).area() > 0) items.push_back(&furniture[i]);
-      for (size_t k = 0; k < objects.size(); ++k)
-        if ((object_rect[k] & tile).area() > 0) objs.push_back(static_cast<int>(k));
-      for (int v = ty * kTile; v < std::min(H, (ty + 1) * kTile); ++v) {
-      cv::Vec3f* col = out.color.ptr<cv::Vec3f>(v);
-      float* dep = out.depth_clean.ptr<float>(v);
-      uint8_t* oid = out.object_id.ptr<uint8_t>(v);
-      float* cosi = out.cos_incidence.ptr<float>(v);
-      for (int u = tx * kTile; u < std::min(W, (tx + 1) * kTile); ++u) {
-        // Unnormalised so that the ray parameter t is the depth (camera z) of the hit.
-        const Eigen::Vector3d d_c((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-        const Ray ray_w(o_w, R_wc * d_c);
-        Hit hit;
-        int room_face = -1;
-        Eigen::Vector3d n_w = Eigen::Vector3d::Zero();
-        if (room) {
-          // Inside the room the ray leaves through the nearest far face.
-          double t_far = kInf;
-          for (int i = 0; i < 3; ++i) {
-            const double b = ((ray_w.d[i] > 0 ? room->size[i] : 0.0) - o_w[i]) * ray_w.inv[i];
-            if (b < t_far) {
-              t_far = b;
-              room_face = 2 * i + (ray_w.d[i] > 0 ? 1 : 0);
-            }
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        const cv::Rect2d tile(tx * kTile, ty * kTile, kTile, kTile);
+        items.clear();
+        objs.clear();
+        for (size_t i = 0; i < furniture.size(); ++i)
+          if ((furniture_rect[i] & tile).area() > 0) items.push_back(&furniture[i]);
+        for (size_t k = 0; k < objects.size(); ++k)
+          if ((object_rect[k] & tile).area() > 0) objs.push_back(static_cast<int>(k));
+        for (int v = ty * kTile; v < std::min(H, (ty + 1) * kTile); ++v)
+          for (int u = tx * kTile; u < std::min(W, (tx + 1) * kTile); ++u) {
+            const PixelSample p =
+                castPixel(view, Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0));
+            out.color.at<cv::Vec3f>(v, u) = p.color;
+            out.depth_clean.at<float>(v, u) = p.depth;
+            out.object_id.at<uint8_t>(v, u) = p.object_id;
+            out.cos_incidence.at<float>(v, u) = p.cos_incidence;
           }
-          if (t_far > 0) {
-            hit.t = t_far;
-            hit.axis = room_face / 2;
-            hit.part = &room->faces[room_face];
-          }
-        }
-        for (const Item* item : items) castItem(*item, ray_w, hit, -1);
-        Eigen::Vector3d p_local;
-        for (int k : objs) {
-          const Ray ray_o(posed[k].o_o, posed[k].R_oc * d_c);
-          const Part* before = hit.part;
-          castItem(objects[k].shape, ray_o, hit, k);
-          if (hit.part != before) p_local = ray_o.o + hit.t * ray_o.d;
-        }
-        if (!hit.part) {
-          col[u] = cv::Vec3f(0, 0, 0);
-          dep[u] = 0;
-          oid[u] = 0;
-          cosi[u] = 0;
-          continue;
-        }
-        const Eigen::Vector3d p_w = o_w + hit.t * ray_w.d;
-        Eigen::Vector2d uv;
-        if (hit.object >= 0) {
-          Eigen::Vector3d n_o = Eigen::Vector3d::Zero();
-          const Eigen::Vector3d d_o = posed[hit.object].R_oc * d_c;
-          n_o[hit.axis] = d_o[hit.axis] > 0 ? -1.0 : 1.0;
-          n_w = posed[hit.object].R_wo * n_o;
-          uv = faceUv(p_local, hit.axis);
-        } else {
-          n_w[hit.axis] = ray_w.d[hit.axis] > 0 ? -1.0 : 1.0;
-          uv = faceUv(p_w, hit.axis);
-        }
-        const double cos_i = std::fabs(n_w.dot(ray_w.d)) / ray_w.d.norm();
-        col[u] = shadeHit(*this, *hit.part, ray_w, hit.t, p_w, n_w, uv, cos_i, pixel_angle);
-        dep[u] = static_cast<float>(hit.t);
-        oid[u] = static_cast<uint8_t>(hit.object + 1);
-        cosi[u] = static_cast<float>(cos_i);
       }
-      }
-    }
   });
   return out;
 }

@@ -184,10 +184,8 @@ void scaleAngularSpeed(CameraPath& cam, double deg_per_s) {
   cam.roll.scaleTime(k_r);
 }
 
-void addCentreFurniture(SceneModel& m, Rng& rng, const CameraPath& cam, const Palette& pal);
-
-// The room, its furniture, the light and the camera path: everything of the static twin.
-CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
+// The room's box with its textures into m.room, and the palette its furniture is made of.
+Palette addRoomShell(SceneModel& m, Rng& rng) {
   Room room;
   room.size = Eigen::Vector3d(rng.uniform(6.5, 8.0), rng.uniform(6.5, 8.0), rng.uniform(2.6, 3.0));
   const int wall = m.addTexture(Material::Plaster, rng);
@@ -209,17 +207,13 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
     room.faces[f] = box(Eigen::Vector3d::Zero(), room.size, tex, rng);
   }
   m.room = room;
+  return pal;
+}
 
-  for (int w = 0; w < 4; ++w) {
-    const WallFrame f{w, room.size};
-    const double len = w < 2 ? room.size.y() : room.size.x();
-    // Walls 2 and 3 leave the corners to walls 0 and 1.
-    const double margin = w < 2 ? 0.1 : 1.0;
-    furnishWall(m, rng, f, margin, len - margin, pal);
-  }
-
+// A handheld camera path about the room's centre, at the configured RMS speeds.
+CameraPath handheldPath(Rng& rng, const Eigen::Vector3d& room_size, const SynthConfig& cfg) {
   CameraPath cam;
-  cam.centre = Eigen::Vector3d(room.size.x() / 2, room.size.y() / 2, rng.uniform(1.35, 1.55));
+  cam.centre = Eigen::Vector3d(room_size.x() / 2, room_size.y() / 2, rng.uniform(1.35, 1.55));
   cam.yaw0 = rng.uniform(0, 2 * M_PI);
   cam.pitch0 = -rng.uniform(4, 12) * kDeg;
   cam.position[0] = randomSinusoids(rng, {{0.25, 0.07}, {0.12, 0.15}, {0.05, 0.3}});
@@ -233,17 +227,13 @@ CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
   const double k_t = cfg.camera_speed / std::sqrt(v2);
   for (auto& p : cam.position) p.scaleTime(k_t);
   scaleAngularSpeed(cam, cfg.camera_angular_speed);
-
-  // Free-standing furniture between the camera and the objects' paths, near the initial view
-  // direction, so that objects are also occluded (not on a loop, which passes where it stands).
-  if (cfg.camera_path == CameraPathKind::Sweep) addCentreFurniture(m, rng, cam, pal);
-  m.light.position = Eigen::Vector3d(room.size.x() / 2 + rng.uniform(-1, 1), room.size.y() / 2 + rng.uniform(-1, 1),
-                                     room.size.z() - 0.4);
   return cam;
 }
 
-void addCentreFurniture(SceneModel& m, Rng& rng, const CameraPath& cam, const Palette& pal) {
-  const Eigen::Vector3d room_size = m.room->size;
+// Free-standing furniture between the camera and the objects' paths, near the initial view
+// direction, so that objects are also occluded: a coffee table and a floor lamp.
+void addFreeStanding(SceneModel& m, Rng& rng, const CameraPath& cam, const Palette& pal) {
+  const Eigen::Vector3d& room_size = m.room->size;
   const Eigen::Vector2d c2(cam.centre.x(), cam.centre.y());
   {
     const double a = cam.yaw0 + rng.uniform(-0.6, -0.2), r = rng.uniform(1.05, 1.15);
@@ -259,20 +249,37 @@ void addCentreFurniture(SceneModel& m, Rng& rng, const CameraPath& cam, const Pa
              p.x() - w / 2, w, p.y() - d / 2, d, h, pal.painted_b, pal.dark);
     m.furniture.push_back(it);
   }
-  {
-    const double a = cam.yaw0 + rng.uniform(0.25, 0.6), r = rng.uniform(1.1, 1.2);
-    const Eigen::Vector2d p = c2 + r * Eigen::Vector2d(std::cos(a), std::sin(a));
-    const double h = rng.uniform(1.5, 1.75);
-    Item it;
-    it.kind = "floor_lamp";
-    it.add(box(Eigen::Vector3d(p.x() - 0.15, p.y() - 0.15, 0), Eigen::Vector3d(p.x() + 0.15, p.y() + 0.15, 0.03),
-               pal.dark, rng));
-    it.add(box(Eigen::Vector3d(p.x() - 0.02, p.y() - 0.02, 0.03), Eigen::Vector3d(p.x() + 0.02, p.y() + 0.02, h),
-               pal.dark, rng));
-    it.add(box(Eigen::Vector3d(p.x() - 0.17, p.y() - 0.17, h), Eigen::Vector3d(p.x() + 0.17, p.y() + 0.17, h + 0.3),
-               pal.fabric, rng, 1.3f));
-    m.furniture.push_back(it);
+  const double a = cam.yaw0 + rng.uniform(0.25, 0.6), r = rng.uniform(1.1, 1.2);
+  const Eigen::Vector2d p = c2 + r * Eigen::Vector2d(std::cos(a), std::sin(a));
+  const double h = rng.uniform(1.5, 1.75);
+  Item it;
+  it.kind = "floor_lamp";
+  it.add(box(Eigen::Vector3d(p.x() - 0.15, p.y() - 0.15, 0), Eigen::Vector3d(p.x() + 0.15, p.y() + 0.15, 0.03),
+             pal.dark, rng));
+  it.add(box(Eigen::Vector3d(p.x() - 0.02, p.y() - 0.02, 0.03), Eigen::Vector3d(p.x() + 0.02, p.y() + 0.02, h),
+             pal.dark, rng));
+  it.add(box(Eigen::Vector3d(p.x() - 0.17, p.y() - 0.17, h), Eigen::Vector3d(p.x() + 0.17, p.y() + 0.17, h + 0.3),
+             pal.fabric, rng, 1.3f));
+  m.furniture.push_back(it);
+}
+
+// The room, its furniture, the light and the camera path: everything of the static twin.
+CameraPath buildRoom(SceneModel& m, Rng& rng, const SynthConfig& cfg) {
+  const Palette pal = addRoomShell(m, rng);
+  const Eigen::Vector3d room_size = m.room->size;
+  for (int w = 0; w < 4; ++w) {
+    const WallFrame f{w, room_size};
+    const double len = w < 2 ? room_size.y() : room_size.x();
+    // Walls 2 and 3 leave the corners to walls 0 and 1.
+    const double margin = w < 2 ? 0.1 : 1.0;
+    furnishWall(m, rng, f, margin, len - margin, pal);
   }
+  const CameraPath cam = handheldPath(rng, room_size, cfg);
+  // Not on a loop, which passes where it would stand.
+  if (cfg.camera_path == CameraPathKind::Sweep) addFreeStanding(m, rng, cam, pal);
+  m.light.position = Eigen::Vector3d(room_size.x() / 2 + rng.uniform(-1, 1), room_size.y() / 2 + rng.uniform(-1, 1),
+                                     room_size.z() - 0.4);
+  return cam;
 }
 
 void addObjects(SceneModel& m, Rng& rng, const SynthConfig& cfg, const CameraPath& cam) {

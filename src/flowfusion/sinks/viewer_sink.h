@@ -11,7 +11,7 @@
 
 #include "flowfusion/pipeline/result_sink.h"
 
-namespace ff::report {
+namespace ff {
 
 struct ViewerOptions {
   std::string window = "flowfusion";
@@ -23,7 +23,7 @@ class ViewerSink : public ResultSink {
   explicit ViewerSink(ViewerOptions options = {});
   void begin(const RunInfo& info) override;
   void frame(const RgbdFrame& frame, const FrameResult& result) override;
-  void end(RunSummary& summary, const FlowFusionSystem& system) override;
+  void end(RunSummary& summary, const StaticMap* map) override;
 
   // The image last shown (empty before the first frame or without a display), and how many were.
   const cv::Mat& lastImage() const { return last_; }
@@ -44,4 +44,4 @@ class ViewerSink : public ResultSink {
 // Whether a window can be opened here (DISPLAY or WAYLAND_DISPLAY set).
 bool displayAvailable();
 
-}  // namespace ff::report
+}  // namespace ff

@@ -1,4 +1,4 @@
-#include "flowfusion/report/viewer_sink.h"
+#include "flowfusion/sinks/viewer_sink.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -7,7 +7,7 @@
 
 #include "flowfusion/visualization/overlay.h"
 
-namespace ff::report {
+namespace ff {
 namespace {
 
 cv::Mat fitHeight(const cv::Mat& bgr, int height) {
@@ -95,7 +95,7 @@ void ViewerSink::frame(const RgbdFrame& frame, const FrameResult& result) {
   ++shown_;
 }
 
-void ViewerSink::end(RunSummary& summary, const FlowFusionSystem&) {
+void ViewerSink::end(RunSummary& summary, const StaticMap*) {
   if (!has_display_) {
     summary.notes.push_back("--show: no display (DISPLAY and WAYLAND_DISPLAY are unset), nothing shown");
     return;
@@ -105,4 +105,4 @@ void ViewerSink::end(RunSummary& summary, const FlowFusionSystem&) {
   open_ = false;
 }
 
-}  // namespace ff::report
+}  // namespace ff

@@ -35,7 +35,7 @@ class McapSink : public ResultSink {
   void begin(const RunInfo& info) override;
   void frame(const RgbdFrame& frame, const FrameResult& result) override;
   // finish() with the trajectory and the map's stable surfels; adds the file to summary.written.
-  void end(RunSummary& summary, const FlowFusionSystem& system) override;
+  void end(RunSummary& summary, const StaticMap* map) override;
   // Writes the path and the map and closes the file (convert-results calls it for a finished run).
   void finish(const Trajectory& trajectory, const std::vector<McapMapPoint>& map);
 

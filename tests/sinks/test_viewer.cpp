@@ -11,12 +11,12 @@
 #include "flowfusion/io/frame_source.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/pipeline/run.h"
-#include "flowfusion/report/viewer_sink.h"
+#include "flowfusion/sinks/viewer_sink.h"
 #include "testing/test_util.h"
 
 namespace fs = std::filesystem;
 
-namespace ff::report {
+namespace ff {
 namespace {
 
 constexpr int kFrames = 6;
@@ -83,4 +83,4 @@ TEST_F(ViewerTest, UnderXvfbTheWindowShowsEveryFrame) {
 }
 
 }  // namespace
-}  // namespace ff::report
+}  // namespace ff

@@ -36,9 +36,10 @@ class FilesSink : public ResultSink {
 
   void begin(const RunInfo& info) override;
   void frame(const RgbdFrame& frame, const FrameResult& result) override;
-  void end(RunSummary& summary, const FlowFusionSystem& system) override;
-
-  const std::string& outDir() const { return options_.out_dir; }
+  void end(RunSummary& summary, const StaticMap* map) override;
+  // masks/<timestamp>.png as frame() writes it, for a result kept without its frame (the Python
+  // System's save()); `dynamic_mask` in the system's pixels, taken back by the source's toRawPixels.
+  void writeMask(double timestamp, const cv::Mat& dynamic_mask);
 
  private:
   class ImageWriter;

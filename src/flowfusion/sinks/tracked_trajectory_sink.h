@@ -12,7 +12,7 @@ namespace ff {
 class TrackedTrajectorySink : public ResultSink {
  public:
   explicit TrackedTrajectorySink(std::string out_dir) : out_dir_(std::move(out_dir)) {}
-  void end(RunSummary& summary, const FlowFusionSystem& system) override;
+  void end(RunSummary& summary, const StaticMap* map) override;
 
  private:
   std::string out_dir_;

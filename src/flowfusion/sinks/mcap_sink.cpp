@@ -1,4 +1,4 @@
-#include "flowfusion/pipeline/mcap_sink.h"
+#include "flowfusion/sinks/mcap_sink.h"
 
 #include <cmath>
 #include <cstring>
@@ -135,9 +135,9 @@ void McapSink::frame(const RgbdFrame& frame, const FrameResult& result) {
   writer_->write(c.depth, nanos(t), rawImage(t, frame.depth, "32FC1").dump());
 }
 
-void McapSink::end(RunSummary& summary, const FlowFusionSystem& system) {
+void McapSink::end(RunSummary& summary, const StaticMap* map) {
   std::vector<McapMapPoint> points;
-  if (const StaticMap* map = system.map())
+  if (map)
     for (const Surfel& s : map->surfels()) {
       if (s.confidence < map->config().stable_confidence) continue;
       McapMapPoint p;

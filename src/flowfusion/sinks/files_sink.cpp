@@ -1,4 +1,4 @@
-#include "flowfusion/pipeline/files_sink.h"
+#include "flowfusion/sinks/files_sink.h"
 
 #include <chrono>
 #include <condition_variable>
@@ -24,6 +24,11 @@ namespace ff {
 
 namespace {
 constexpr size_t kWaitingImages = 4;  // images queued for the writer at most (2 to 4 frames)
+
+// An image of the system's pixels in the source's raw pixels (the same without a source).
+cv::Mat inRawPixels(const FrameSource* source, const cv::Mat& image) {
+  return source ? source->toRawPixels(image) : image;
+}
 }  // namespace
 
 // Runs write jobs on one thread in the order given, at most `depth` waiting. After a job fails the
@@ -125,18 +130,21 @@ void FilesSink::begin(const RunInfo& info) {
 }
 
 void FilesSink::frame(const RgbdFrame& frame, const FrameResult& result) {
-  if (!writer_) return;
-  const fs::path out(options_.out_dir);
-  const std::string stem = timestampName(frame.timestamp) + ".png";
-  const auto raw = [source = source_](const cv::Mat& m) { return source ? source->toRawPixels(m) : m; };
+  writeMask(frame.timestamp, result.dynamic_mask);
   // Copies: the caller may change its images once frame() returns.
-  const cv::Mat mask = result.dynamic_mask.clone();
-  if (options_.write_masks)
-    writer_->push([path = (out / "masks" / stem).string(), mask, raw] { writePngAtomic(path, raw(mask), "mask"); });
-  if (options_.write_overlays)
-    writer_->push([path = (out / "overlays" / stem).string(), color = frame.color.clone(), mask, raw] {
-      writePngAtomic(path, raw(overlayMask(color, mask)), "overlay");
+  if (writer_ && options_.write_overlays)
+    writer_->push([path = (fs::path(options_.out_dir) / "overlays" / (timestampName(frame.timestamp) + ".png")).string(),
+                   color = frame.color.clone(), mask = result.dynamic_mask.clone(), source = source_] {
+      writePngAtomic(path, inRawPixels(source, overlayMask(color, mask)), "overlay");
     });
+}
+
+void FilesSink::writeMask(double timestamp, const cv::Mat& dynamic_mask) {
+  if (!writer_ || !options_.write_masks) return;
+  writer_->push([path = (fs::path(options_.out_dir) / "masks" / (timestampName(timestamp) + ".png")).string(),
+                 mask = dynamic_mask.clone(), source = source_] {
+    writePngAtomic(path, inRawPixels(source, mask), "mask");
+  });
 }
 
 // Waits for the images still queued. A failed write makes the run incomplete (or, when it already
@@ -177,7 +185,7 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
   summary.written.push_back((out / "preview").string() + "/");
 }
 
-void FilesSink::end(RunSummary& summary, const FlowFusionSystem& system) {
+void FilesSink::end(RunSummary& summary, const StaticMap* map) {
   const std::exception_ptr image_error = finishImages(summary);
   const fs::path out(options_.out_dir);
   writeTrajectory((out / "trajectory.txt").string(), summary.trajectory);
@@ -186,7 +194,7 @@ void FilesSink::end(RunSummary& summary, const FlowFusionSystem& system) {
   summary.written.push_back((out / "timings.csv").string());
   if (options_.write_masks) summary.written.push_back((out / "masks").string() + "/");
   if (options_.write_overlays) summary.written.push_back((out / "overlays").string() + "/");
-  if (const StaticMap* map = system.map(); map && options_.export_map) exportMap(summary, *map);
+  if (map && options_.export_map) exportMap(summary, *map);
   writeSummary(summary);
   if (image_error) std::rethrow_exception(image_error);
 }

@@ -1,0 +1,48 @@
+# The ROS 1 node (`flowfusion ros`, src/flowfusion/ros/) with Debian's ROS 1 packages (roscpp,
+# message_filters, tf2_ros, nav_msgs, diagnostic_updater, std_srvs; scripts/install-deps.sh), found by
+# their headers and libraries as the bag support is (cmake/FlowfusionRosbag.cmake: their catkin
+# configs need a ROS Python environment). Without them the build works and `flowfusion ros` says how
+# to enable it. The node's tests also need the ROS tools (roscore, rosbag, rosservice) and the bag
+# support. Sets FLOWFUSION_ROS_NODE_FOUND, _INCLUDE_DIRS, _LIBRARIES, FLOWFUSION_ROS_TOOLS_FOUND.
+option(FLOWFUSION_WITH_ROS_NODE "Build the ROS 1 node when Debian's roscpp packages are installed" ON)
+set(FLOWFUSION_ROS_NODE_FOUND OFF)
+set(FLOWFUSION_ROS_TOOLS_FOUND OFF)
+if(FLOWFUSION_WITH_ROS_NODE AND FLOWFUSION_ROSBAG_FOUND)
+  set(_ros_node_missing)
+  set(FLOWFUSION_ROS_NODE_INCLUDE_DIRS)
+  foreach(_header ros/ros.h message_filters/synchronizer.h tf2_ros/transform_broadcaster.h nav_msgs/Odometry.h
+                  nav_msgs/Path.h sensor_msgs/PointCloud2.h diagnostic_updater/diagnostic_updater.h std_srvs/Trigger.h)
+    string(MAKE_C_IDENTIFIER ${_header} _var)
+    find_path(FLOWFUSION_ROS_INC_${_var} ${_header})
+    if(FLOWFUSION_ROS_INC_${_var})
+      list(APPEND FLOWFUSION_ROS_NODE_INCLUDE_DIRS ${FLOWFUSION_ROS_INC_${_var}})
+    else()
+      list(APPEND _ros_node_missing ${_header})
+    endif()
+  endforeach()
+  set(FLOWFUSION_ROS_NODE_LIBRARIES)
+  foreach(_lib roscpp rosconsole roscpp_serialization rostime cpp_common xmlrpcpp message_filters tf2_ros tf2
+               diagnostic_updater)
+    find_library(FLOWFUSION_ROS_LIB_${_lib} ${_lib})
+    if(FLOWFUSION_ROS_LIB_${_lib})
+      list(APPEND FLOWFUSION_ROS_NODE_LIBRARIES ${FLOWFUSION_ROS_LIB_${_lib}})
+    else()
+      list(APPEND _ros_node_missing lib${_lib})
+    endif()
+  endforeach()
+  if(NOT _ros_node_missing)
+    set(FLOWFUSION_ROS_NODE_FOUND ON)
+    list(REMOVE_DUPLICATES FLOWFUSION_ROS_NODE_INCLUDE_DIRS)
+  endif()
+  find_program(FLOWFUSION_ROSCORE roscore)
+  find_program(FLOWFUSION_ROSBAG rosbag)
+  find_program(FLOWFUSION_ROSSERVICE rosservice)
+  if(FLOWFUSION_ROSCORE AND FLOWFUSION_ROSBAG AND FLOWFUSION_ROSSERVICE)
+    set(FLOWFUSION_ROS_TOOLS_FOUND ON)
+  endif()
+endif()
+if(FLOWFUSION_ROS_NODE_FOUND)
+  message(STATUS "flowfusion: ROS 1 node enabled (flowfusion ros)")
+else()
+  message(STATUS "flowfusion: ROS 1 node disabled (install the ROS 1 block of scripts/install-deps.sh to build `flowfusion ros`)")
+endif()

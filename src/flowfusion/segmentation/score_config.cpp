@@ -1,0 +1,44 @@
+#include "flowfusion/segmentation/score_config.h"
+
+#include <cmath>
+
+#include "flowfusion/core/error.h"
+
+namespace ff {
+
+void validate(const ScoreConfig& c) {
+  if (!(c.alpha_I >= 0 && std::isfinite(c.alpha_I))) throw InputError("scores.alpha_I must be a finite value >= 0");
+  if (!(c.alpha_F >= 0 && std::isfinite(c.alpha_F))) throw InputError("scores.alpha_F must be a finite value >= 0");
+  if (!(std::isfinite(c.theta_b) && std::isfinite(c.theta_t) && c.theta_t > c.theta_b))
+    throw InputError("scores.theta_t must be greater than scores.theta_b (both finite)");
+  if (!(c.lambda_G >= 0 && std::isfinite(c.lambda_G))) throw InputError("scores.lambda_G must be a finite value >= 0");
+  if (!(c.alpha_M >= 0 && std::isfinite(c.alpha_M)))
+    throw InputError("scores.alpha_M must be a finite value >= 0 (0 turns the model term off)");
+  if (!(c.model_margin >= 0 && c.model_margin < 1)) throw InputError("scores.model_margin must be in [0, 1)");
+  if (!(c.model_motion_delta >= 0 && std::isfinite(c.model_motion_delta)))
+    throw InputError("scores.model_motion_delta must be a finite value >= 0");
+  if (!(c.model_agreement >= 0 && c.model_agreement <= 1))
+    throw InputError("scores.model_agreement must be in [0, 1] (0 turns the map's static evidence off)");
+  if (!(c.agreement_margin > 0 && c.agreement_margin < 1)) throw InputError("scores.agreement_margin must be in (0, 1)");
+  if (!(c.agreement_intensity > 0 && c.agreement_intensity <= 1))
+    throw InputError("scores.agreement_intensity must be in (0, 1] (1 compares depth alone)");
+  if (!(c.temporal_prior >= 0 && std::isfinite(c.temporal_prior)))
+    throw InputError("scores.temporal_prior must be a finite value >= 0 (0 turns the prior off)");
+  if (!(c.body_smoothing >= 0 && std::isfinite(c.body_smoothing)))
+    throw InputError("scores.body_smoothing must be a finite value >= 0 (1 = the paper's uniform lambda_G)");
+  if (!(c.body_depth_ratio >= 0 && c.body_depth_ratio < 1)) throw InputError("scores.body_depth_ratio must be in [0, 1)");
+  if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
+    throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
+  if (!(c.target_mover_share >= 0 && c.target_mover_share <= 1))
+    throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
+  if (!(c.target_mover_margin_px >= 0 && c.target_mover_margin_px <= 16))
+    throw InputError("scores.target_mover_margin_px must be in [0, 16] pixels (0 turns the margin off)");
+  if (!(c.depth_offset_ms >= 0 && c.depth_offset_ms <= 100))
+    throw InputError("scores.depth_offset_ms must be in [0, 100] milliseconds (0: the stamps alone)");
+  if (!(c.depth_window_px >= 0 && c.depth_window_px <= 8))
+    throw InputError("scores.depth_window_px must be in [0, 8] pixels (0 compares the depth where a pixel lands)");
+  if (!(c.flow_error_px >= 0 && std::isfinite(c.flow_error_px)))
+    throw InputError("scores.flow_error_px must be a finite number of pixels >= 0 (0 turns the scaling off)");
+}
+
+}  // namespace ff
