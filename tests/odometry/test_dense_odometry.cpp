@@ -13,17 +13,13 @@
 #include "flowfusion/core/error.h"
 #include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
 
 namespace ff {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
-SE3 motion(const Eigen::Vector3d& t_m, const Eigen::Vector3d& axis_angle_rad) {
-  Vector6d xi;
-  xi << t_m, axis_angle_rad;
-  return expSE3(xi);
-}
+using testing::kDeg;
+using testing::motion;
 
 struct Error {
   double translation_m;

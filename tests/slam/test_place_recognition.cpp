@@ -11,11 +11,12 @@
 #include "flowfusion/slam/loop_verifier.h"
 #include "flowfusion/slam/place_index.h"
 #include "flowfusion/synth/synthetic_scene.h"
+#include "testing/test_util.h"
 
 namespace ff {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using testing::kDeg;
 constexpr int kKeyframes = 16;  // every 22.5 degrees around the room
 constexpr int kTrue = 5;        // the keyframe the query view is near
 

@@ -10,17 +10,13 @@
 #include "flowfusion/core/error.h"
 #include "flowfusion/slam/pose_graph.h"
 #include "flowfusion/slam/slam_config.h"
+#include "testing/test_util.h"
 
 namespace ff {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
-SE3 motion(const Eigen::Vector3d& t_m, const Eigen::Vector3d& axis_angle_rad) {
-  Vector6d xi;
-  xi << t_m, axis_angle_rad;
-  return expSE3(xi);
-}
+using testing::kDeg;
+using testing::motion;
 
 // n poses on a circle of radius 1 m, each looking outwards, with some height and tilt.
 std::vector<SE3> ring(int n) {

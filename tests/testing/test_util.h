@@ -2,12 +2,24 @@
 // Helpers shared by the test suites.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
 
+#include "flowfusion/core/se3.h"
+
 namespace ff::testing {
+
+inline constexpr double kDeg = M_PI / 180.0;
+
+// exp([t_m; axis_angle_rad]): a translation in metres and a rotation vector in radians.
+inline SE3 motion(const Eigen::Vector3d& t_m, const Eigen::Vector3d& axis_angle_rad) {
+  Vector6d xi;
+  xi << t_m, axis_angle_rad;
+  return expSE3(xi);
+}
 
 // A fresh, empty temporary folder removed when the object goes out of scope.
 class TempDir {
