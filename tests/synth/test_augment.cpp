@@ -1,6 +1,7 @@
 // Augmenting static sequences: compositing with a depth test, exact masks, interpolated poses.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -160,6 +161,15 @@ TEST(Augment, RealFr1XyzFrames) {
   const cv::Mat mask = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(f.timestamp) + ".png")).string(),
                                   cv::IMREAD_UNCHANGED);
   EXPECT_GT(cv::countNonZero(mask), 1000) << "objects at 0.7-2 m in front of the first camera";
+  // The real depth keeps its own stamp (fr1/xyz: 3.6 ms or more after the colour's), which the
+  // pipeline reads as the depth's time.
+  const auto real = ff::TumSequence::open(dir);
+  for (size_t i = 0; i < seq.size(); ++i) {
+    const auto a = real.load(i), b = seq.load(i);
+    ASSERT_NEAR(a.timestamp, b.timestamp, 1e-9);
+    EXPECT_GT(std::abs(a.depth_timestamp - a.timestamp), 1e-3);
+    EXPECT_NEAR(b.depth_timestamp, a.depth_timestamp, 1e-6) << "frame " << i;
+  }
 }
 
 TEST(AugmentCli, RunsOnStaticSequence) {
