@@ -1,6 +1,7 @@
 #pragma once
 // One RGB-D observation in the units every stage uses.
 #include <opencv2/core.hpp>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -16,6 +17,8 @@ struct RgbdFrame {
   cv::Mat depth;         // CV_32FC1, metres along the optical axis; 0 = no measurement
   std::string name;      // where it came from (file name), for messages
 
+  // The depth image's time, seconds: depth_timestamp, or timestamp when that is NaN.
+  double depthTime() const { return std::isnan(depth_timestamp) ? timestamp : depth_timestamp; }
   int width() const { return depth.cols; }
   int height() const { return depth.rows; }
 };

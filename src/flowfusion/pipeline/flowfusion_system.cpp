@@ -13,8 +13,6 @@ namespace ff {
 
 namespace {
 
-double depthTime(const RgbdFrame& f) { return std::isnan(f.depth_timestamp) ? f.timestamp : f.depth_timestamp; }
-
 using Clock = std::chrono::steady_clock;
 
 const SystemConfig& validated(const SystemConfig& config) {
@@ -136,7 +134,7 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
   }
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
-  velocity_dt_ = depthTime(frame) - depthTime(prev.frame);
+  velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
   return estimate.scores;
 }
 
@@ -226,7 +224,7 @@ void FlowFusionSystem::finishFusion() const {
 SE3 FlowFusionSystem::atColourTime(const RgbdFrame& frame, const SE3& T_world_cam) const {
   // The geometry dominates the odometry, so the pose found is the camera's at the depth image's time.
   if (!config_.pipeline.shift_to_colour_time || velocity_dt_ <= 0) return T_world_cam;
-  const double s = (frame.timestamp - depthTime(frame)) / velocity_dt_;
+  const double s = (frame.timestamp - frame.depthTime()) / velocity_dt_;
   if (std::abs(s) >= 1.0) return T_world_cam;
   return orthonormalized(T_world_cam * expSE3(s * logSE3(T_prev_cur_velocity_)));
 }

@@ -203,9 +203,8 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   }
   const double dt_s = in.frame.timestamp - in.previous.frame.timestamp;
   // How far apart the depth may be taken from the colour: their stamps, and the allowance.
-  const double stamps_s =
-      std::isnan(in.frame.depth_timestamp) ? 0.0 : std::abs(in.frame.timestamp - in.frame.depth_timestamp);
-  const double depth_offset_s = stamps_s + config_.scores.depth_offset_ms / 1000;
+  const double depth_offset_s =
+      std::abs(in.frame.timestamp - in.frame.depthTime()) + config_.scores.depth_offset_ms / 1000;
   const double depth_m = medianClusterDepth(graph);
   DynamicScores scores;
   for (int round = 0; round < opt.max_iterations; ++round) {
