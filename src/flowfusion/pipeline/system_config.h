@@ -42,6 +42,9 @@ struct PipelineOptions {
   int refine_iterations = 1;         // Gauss-Newton iterations per level of each re-estimate
   int segmentation_level = 1;        // pyramid level of clusters and residuals (1 = half size)
   float mask_threshold = 0.5f;       // pixels with b above it are written as dynamic
+  // A region without depth is written as dynamic when at least this share of the pixels with depth
+  // around it is (fillDepthHoles: a mover nearer than the sensor's range; 0: never).
+  double mask_hole_share = 0.8;
   // The first odometry of a frame is weighted by the previous frame's scores carried over, so a
   // moving object seen before does not pull it (false: the paper's unweighted Eq. 1).
   bool carry_scores = true;
@@ -65,7 +68,8 @@ struct PipelineOptions {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
-                                                refine_iterations, segmentation_level, mask_threshold, carry_scores,
+                                                refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
+                                                carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
                                                 model_min_valid_fraction, budget_ms)
 
