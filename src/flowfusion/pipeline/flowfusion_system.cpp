@@ -15,6 +15,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The frame found in a saved map is aligned to the map's rendering at its pose until a step moves
+// it by less than this, at most kMaxMapRefinements times (each a rendering and an odometry). On the
+// test's room, 1, 2, 4 alignments: 7.9 cm off the truth -> 1.8, 1.3 cm (test_map_reuse.cpp).
+constexpr int kMaxMapRefinements = 5;
+constexpr double kMapRefinedStepM = 0.001, kMapRefinedStepDeg = 0.1;
+
 const SystemConfig& validated(const SystemConfig& config) {
   validate(config);
   return config;
@@ -46,7 +52,22 @@ void FlowFusionSystem::continueIn(const SavedMap& map) {
   map_reuse_ = MapReuse{map.path, static_cast<int>(map.keyframes.size()), map.surfels.size()};
 }
 
-bool FlowFusionSystem::localizeInSavedMap(const RgbdFrame& frame, FrameResult& result) {
+SE3 FlowFusionSystem::refinedInSavedMap(const OdometryFrame& cur, const SE3& T_world_cam) const {
+  if (!map_) return T_world_cam;
+  SE3 T = T_world_cam;
+  for (int i = 0; i < kMaxMapRefinements; ++i) {
+    const ModelPrediction p = map_->predict(T, camera_);
+    const OdometryFrame target = prepareOdometryFrame(p.intensity, p.depth, camera_, config_.odometry);
+    const OdometryResult r = odometry_.estimate(cur, target, SE3::Identity(), {}, {});
+    if (!r.ok) break;
+    T = orthonormalized(T * r.T_target_source);
+    if (translationNorm(r.T_target_source) < kMapRefinedStepM && rotationAngleDeg(r.T_target_source) < kMapRefinedStepDeg)
+      break;
+  }
+  return T;
+}
+
+bool FlowFusionSystem::localizeInSavedMap(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result) {
   StageTimer timer(timings_, "relocalization");
   const std::optional<SE3> found = slam_->relocalize(frame, {});
   if (!found) {
@@ -56,7 +77,7 @@ bool FlowFusionSystem::localizeInSavedMap(const RgbdFrame& frame, FrameResult& r
     return false;
   }
   map_reuse_->localized_at_frame = static_cast<int>(frame_ms_.size());
-  T_world_first_ = *found;
+  T_world_first_ = refinedInSavedMap(cur, *found);
   return true;
 }
 
@@ -94,7 +115,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   timings_.beginFrame(frame.timestamp);
   applyLoopCorrections();
   OdometryFrame cur = prepare(frame);
-  if (map_reuse_ && map_reuse_->localized_at_frame < 0 && !localizeInSavedMap(frame, result)) {
+  if (map_reuse_ && map_reuse_->localized_at_frame < 0 && !localizeInSavedMap(frame, cur, result)) {
     result.dynamic_mask = cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0));
     frame_ms_.push_back(msSince(start));
     return result;

@@ -124,8 +124,12 @@ class FlowFusionSystem {
   // The constructor's part for a saved map.
   void continueIn(const SavedMap& map);
   // Until the run is found in the saved map: seeks the frame against its keyframes; found, the
-  // frame becomes the run's first (at that pose). Returns whether the frame has a pose.
-  bool localizeInSavedMap(const RgbdFrame& frame, FrameResult& result);
+  // frame becomes the run's first, at that pose aligned to the map (refinedInSavedMap). Returns
+  // whether the frame has a pose.
+  bool localizeInSavedMap(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
+  // The pose found against one keyframe's small images, aligned to the whole map's rendering there
+  // (colour and depth, as frame-to-model tracking; unchanged without a map or when that fails).
+  SE3 refinedInSavedMap(const OdometryFrame& cur, const SE3& T_world_cam) const;
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.

@@ -134,7 +134,7 @@ void readHeader(Reader& in, SavedMap& map, size_t& surfels, size_t& keyframes) {
     in.fail(std::string("corrupt map file header: ") + e.what());
   }
   if (!map.camera.valid() || map.keyframe_level < 0 || map.keyframe_level > 8 || map.fern_image_width < 1 ||
-      map.fern_image_width > map.camera.width)
+      map.fern_image_width > 4096)
     in.fail("corrupt map file header: camera or keyframe image sizes out of range");
 }
 
