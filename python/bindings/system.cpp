@@ -211,6 +211,8 @@ void bindResult(py::module_& m) {
           },
           "Dynamic score b per pixel at the segmentation level (float32), or None without segmentation.")
       .def_readonly("tracking_ok", &FrameResult::tracking_ok, "False when the tracker lost the camera.")
+      .def_readonly("has_pose", &FrameResult::has_pose,
+                    "False before a System continuing in a saved map (map_in) is localized in it.")
       .def_readonly("message", &FrameResult::message, "What the tracker did when it did not simply succeed.")
       .def_readonly("used_model", &FrameResult::used_model, "Aligned to the map's prediction.")
       .def_readonly("restarted_from_flow", &FrameResult::restarted_from_flow,

@@ -41,7 +41,7 @@ def test_system_continues_in_a_saved_map(loop_seq, first_run):
     system = ff.System(seq.camera, map_in=first_run / "map.ffmap")
     results = [system.process(f) for f in list(seq)[:3]]
     assert all(r.tracking_ok for r in results), [r.message for r in results]
-    assert results[0].message == "localized in the saved map"
+    assert results[0].message == "localized in the saved map" and results[0].has_pose
 
 
 def test_bad_map_in_is_a_value_error_naming_the_file(synth_seq, first_run, tmp_path):

@@ -95,6 +95,7 @@ TEST(MapReuse, ARunInAnotherRoomIsNeverLocalizedAndSaysSo) {
   for (int i = 0; i < 5; ++i) {
     const FrameResult r = system.process(other->render(i).frame);
     EXPECT_FALSE(r.tracking_ok);
+    EXPECT_FALSE(r.has_pose);
     EXPECT_EQ(r.message, "not localized in the saved map yet: no keyframe matches");
   }
   EXPECT_EQ(system.mapReuse()->localized_at_frame, -1);

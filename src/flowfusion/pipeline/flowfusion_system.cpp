@@ -72,7 +72,7 @@ bool FlowFusionSystem::localizeInSavedMap(const RgbdFrame& frame, const Odometry
   const std::optional<SE3> found = slam_->relocalize(frame, {});
   if (!found) {
     ++map_reuse_->unlocalized_frames;
-    result.tracking_ok = false;
+    result.tracking_ok = result.has_pose = false;
     result.message = "not localized in the saved map yet: no keyframe matches";
     return false;
   }

@@ -26,6 +26,8 @@ struct FrameResult {
   double timestamp = 0;
   SE3 T_world_cam = SE3::Identity();
   bool tracking_ok = true;
+  // False before a run continuing in a saved map is localized in it: T_world_cam means nothing.
+  bool has_pose = true;
   std::string message;          // what the tracker did when it did not simply succeed
   bool used_model = false;      // aligned to the map prediction (frame_to_model or a model keyframe)
   bool restarted_from_flow = false;  // the odometry was restarted from the flow's rigid consensus
