@@ -27,6 +27,7 @@ struct EvalOptions {
   report::WorstMasksOptions sheet_options;
   bool overwrite = false;
   double max_diff_s = 0.02;
+  bool no_align = false;  // eval ate: compare the poses as they stand
   double delta_s = 1.0;
   double threshold_m = 0.03;
   double above = 0.05;  // eval static: a frame counts as falsely marked above this share
@@ -39,7 +40,8 @@ void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit)
 }
 
 void runAte(const EvalOptions& o) {
-  const auto r = eval::computeAte(readTrajectory(o.gt), readTrajectory(o.est), o.max_diff_s, o.gt, o.est);
+  const auto r = eval::computeAte(readTrajectory(o.gt), readTrajectory(o.est), o.max_diff_s, o.gt, o.est,
+                                  o.no_align ? eval::AteAlignment::None : eval::AteAlignment::Horn);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
     return;
@@ -144,6 +146,9 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
   ate->add_option("--max-diff", opts->max_diff_s, "maximum timestamp difference for association, s")
       ->capture_default_str();
   ate->add_flag("--json", opts->json, "print the result as JSON");
+  ate->add_flag("--no-align", opts->no_align,
+                "compare the poses as they stand, without the alignment (a run in the ground truth's frame, e.g. "
+                "`run --map-in` in a map whose run started at the ground truth's first pose)");
   ate->callback([opts] { runAte(*opts); });
 
   auto* rpe = eval->add_subcommand(

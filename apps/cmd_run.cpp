@@ -62,7 +62,7 @@ class ProgressSink : public ResultSink {
 };
 
 struct RunCommand {
-  std::string sequence, out, mcap;
+  std::string sequence, out, mcap, map_in;
   bool overwrite = false, overlays = false, no_map = false, quiet = false, report = false, show = false;
   bool realtime = false;
   double rate = 1.0;  // --rate: times the recorded speed
@@ -88,6 +88,11 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
       const auto ate = eval::computeAte(*source.groundtruth(), s.trajectory);
       std::printf("ATE RMSE %.4f m over %zu poses (ground truth in the sequence folder)\n", ate.translation_m.rmse,
                   ate.matched_poses);
+      if (s.map_in)  // in the saved map's world frame, which its run took from the ground truth
+        std::printf("ATE RMSE without alignment %.4f m\n",
+                    eval::computeAte(*source.groundtruth(), s.trajectory, 0.02, "ground truth", "trajectory",
+                                     eval::AteAlignment::None)
+                        .translation_m.rmse);
     } catch (const InputError& e) {
       std::printf("ATE: not computed: %s\n", e.what());  // e.g. too few poses to align
     }
@@ -96,6 +101,9 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
   std::printf("map: %zu surfels%s; peak memory %.0f MiB\n", s.map_surfels,
               s.map_budget_reached ? " (budget reached: raise fusion.max_surfels for more)" : "", s.peak_memory_mib);
   if (s.lost_frames > 0) std::printf("lost %d frames, relocalized %d\n", s.lost_frames, s.relocalized_frames);
+  if (const std::optional<MapReuse>& m = s.map_in; m && m->localized_at_frame >= 0)
+    std::printf("continued in %s (%d keyframes, %zu surfels): localized at frame %d, %d frames before without a pose\n",
+                m->path.c_str(), m->keyframes, m->surfels, m->localized_at_frame, m->unlocalized_frames);
   for (const auto& note : s.notes) std::printf("note: %s\n", note.c_str());
   std::printf("wrote:");
   for (const auto& w : s.written) std::printf(" %s", w.c_str());
@@ -114,6 +122,9 @@ void execute(const RunCommand& c) {
   refuseOverlap(c.out, c.sequence, "the input sequence");
   setOutputCommand("run");
   const std::unique_ptr<FrameSource> recording = c.system.openSource(c.sequence);
+  // Read and checked before anything is written.
+  std::optional<SavedMap> map_in;
+  if (!c.map_in.empty()) map_in = readMapFor(c.map_in, c.out, recording->camera(), config.slam);
   std::optional<RealtimeReplay> replay;
   if (c.realtime) replay.emplace(*recording, c.rate);
   FrameSource& source = replay ? static_cast<FrameSource&>(*replay) : *recording;
@@ -135,7 +146,9 @@ void execute(const RunCommand& c) {
     sinks.push_back(mcap.get());
   }
   const StopSignals signals;
-  const RunSummary s = runSequence(source, config, sinks, {signals.flag(), signals.reason()});
+  RunControl control{signals.flag(), signals.reason()};
+  control.map_in = map_in ? &*map_in : nullptr;
+  const RunSummary s = runSequence(source, config, sinks, control);
   if (!s.complete) {
     std::fprintf(stderr, "flowfusion: run stopped after %zu frames: %s; partial results in %s (summary.json says so)\n",
                  s.frames, s.stop_reason.c_str(), c.out.c_str());
@@ -155,7 +168,11 @@ const RegisterCommand reg("1-run", [](CLI::App& app) {
   cmd->add_option("--mcap", c->mcap,
                   "Also write the run as an MCAP file for Foxglove (pose, path, colour, mask, depth, calibration, map)");
   cmd->add_flag("--overlays", c->overlays, "Also write overlays/<timestamp>.png (dynamic pixels in red)");
-  cmd->add_flag("--no-map", c->no_map, "Skip map.ply, map_points.ply and preview/");
+  cmd->add_flag("--no-map", c->no_map, "Skip map.ply, map_points.ply, preview/ and map.ffmap");
+  cmd->add_option("--map-in", c->map_in,
+                  "Continue in a previous run's map: its folder (or its map.ffmap). The run finds its first pose "
+                  "among the map's keyframes and tracks and maps in its world frame; summary.json's map_in says "
+                  "when (frames before have no pose)");
   cmd->add_flag("--quiet", c->quiet, "Print nothing on success");
   cmd->add_flag("--report", c->report, "Also write OUT/report.html (see `flowfusion report`)");
   cmd->add_flag("--show", c->show, "Show the frame with its mask, the dynamic score and the path while running");

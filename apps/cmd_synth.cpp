@@ -93,6 +93,13 @@ const ff::app::RegisterCommand synth_command("50-synth", [](CLI::App& app) {
                                           CLI::ignore_case));
   cmd->add_option("--laps", o->config.laps, "With --camera-path loop: this many laps (sets --frames; 0: --frames)")
       ->capture_default_str();
+  cmd->add_option("--path-start", o->config.path_start_s,
+                  "A second recording of the same room (map reuse): the camera path starts this many s along; "
+                  "the ground truth stays in the room's world frame")
+      ->capture_default_str();
+  cmd->add_option("--path-seed", o->config.path_seed,
+                  "With --camera-path loop: the loop's hand-held wobble from this seed (0: --seed), the room unchanged")
+      ->capture_default_str();
   cmd->add_option("--cover-at", o->config.cover_at_s, "Kidnap: the view covered (black, no depth) from this s after the start")
       ->capture_default_str();
   cmd->add_option("--cover-s", o->config.cover_s, "Kidnap: for this many seconds (0: never), the camera moving on")

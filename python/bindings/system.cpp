@@ -31,8 +31,10 @@ cv::Mat inRawPixels(const RawPixels& raw, const cv::Mat& image) { return raw ? r
 // system worked in, with the mapping back to the pixels of the image given).
 class PySystem {
  public:
-  PySystem(const CameraModel& camera, const SystemConfig& config, const SE3& T_world_first, bool keep_masks)
-      : system_(config, camera.intrinsics, T_world_first), keep_masks_(keep_masks) {
+  PySystem(const CameraModel& camera, const SystemConfig& config, const SE3& T_world_first, bool keep_masks,
+           const SavedMap* map_in)
+      : system_(config, camera.intrinsics, T_world_first, map_in), keep_masks_(keep_masks) {
+    if (map_in) map_in_ = map_in->path;
     if (!camera.distortion.none()) undistorter_ = std::make_shared<Undistorter>(camera.intrinsics, camera.distortion);
   }
 
@@ -63,6 +65,7 @@ class PySystem {
     std::vector<std::string> inputs = inputs_;
     if (sequence) inputs.push_back(sequence->sequence().dir());
     for (const auto& input : inputs) refuseOverlap(out_dir, input, "the input sequence");
+    if (!map_in_.empty()) refuseOverlap(out_dir, map_in_, "the map_in map");
     FilesSinkOptions options;
     options.out_dir = out_dir;
     options.overwrite = overwrite;
@@ -105,6 +108,7 @@ class PySystem {
   bool keep_masks_;
   std::vector<KeptMask> masks_;
   std::vector<std::string> inputs_;  // sequence folders of the frames processed
+  std::string map_in_;               // the saved map's file it continues in, or empty
   size_t frames_ = 0;
   long rounds_ = 0;
   double last_timestamp_ = 0;
@@ -207,6 +211,8 @@ void bindResult(py::module_& m) {
           },
           "Dynamic score b per pixel at the segmentation level (float32), or None without segmentation.")
       .def_readonly("tracking_ok", &FrameResult::tracking_ok, "False when the tracker lost the camera.")
+      .def_readonly("has_pose", &FrameResult::has_pose,
+                    "False before a System continuing in a saved map (map_in) is localized in it.")
       .def_readonly("message", &FrameResult::message, "What the tracker did when it did not simply succeed.")
       .def_readonly("used_model", &FrameResult::used_model, "Aligned to the map's prediction.")
       .def_readonly("restarted_from_flow", &FrameResult::restarted_from_flow,
@@ -222,18 +228,25 @@ void bindSystem(py::module_& m) {
                        "The FlowFusion system: feed frames in time order with process(); it tracks the camera, "
                        "segments moving objects and maps the static scene.")
       .def(py::init([](const CameraModel& camera, const std::optional<SystemConfig>& config,
-                       const py::object& T_world_first, bool keep_masks) {
+                       const py::object& T_world_first, bool keep_masks,
+                       const std::optional<std::filesystem::path>& map_in) {
              const SE3 T = T_world_first.is_none() ? SE3::Identity() : poseFromArray(T_world_first, "T_world_first");
-             return std::make_unique<PySystem>(camera, config.value_or(SystemConfig{}), T, keep_masks);
+             const SystemConfig c = config.value_or(SystemConfig{});
+             std::optional<SavedMap> map;
+             if (map_in) map = readMapFor(map_in->string(), "", camera.intrinsics, c.slam);
+             return std::make_unique<PySystem>(camera, c, T, keep_masks, map ? &*map : nullptr);
            }),
            py::arg("camera"), py::arg("config") = py::none(), py::arg("T_world_first") = py::none(),
-           py::arg("keep_masks") = true,
+           py::arg("keep_masks") = true, py::arg("map_in") = py::none(),
            "System(camera, config=None, T_world_first=None, keep_masks=True): camera an ff.Camera; with lens "
            "distortion (ff.Camera.preset('fr1')) process(rgb, depth, ...) takes raw images and undistorts them as "
            "`flowfusion run` does, with seq.camera (pinhole) it takes the frames of a TumSequence as they are. "
            "config an ff.Config (defaults when None), T_world_first the 4x4 pose of the first frame (identity when "
            "None; seq.initial_pose() starts as `flowfusion run`). keep_masks keeps each frame's mask for save() "
-           "(W*H bytes a frame). ValueError naming the first bad setting.")
+           "(W*H bytes a frame). map_in: a previous run's folder (or its map.ffmap) to continue in, as `flowfusion run "
+           "--map-in`: T_world_first is then unused, each frame is sought in the map until one is found (Result."
+           "tracking_ok False before). ValueError naming the first bad setting, or the map file and why it does not "
+           "fit.")
       .def(
           "process",
           [](PySystem& s, const PyFrame& f) {

@@ -63,7 +63,8 @@ std::string synthesise(const std::filesystem::path& out_dir, uint64_t seed, int 
 
 py::dict run(const std::filesystem::path& sequence, const std::filesystem::path& out_dir,
              const std::optional<SystemConfig>& config, const py::object& frames, const py::object& camera,
-             double depth_scale, bool undistort, bool overwrite, bool export_map) {
+             double depth_scale, bool undistort, bool overwrite, bool export_map,
+             const std::optional<std::filesystem::path>& map_in) {
   requireExists(sequence, "sequence folder");
   refuseOverlap(out_dir.string(), sequence.string(), "the input sequence");  // as `flowfusion run`
   const SystemConfig c = config.value_or(SystemConfig{});
@@ -80,7 +81,11 @@ py::dict run(const std::filesystem::path& sequence, const std::filesystem::path&
     files.export_map = export_map;
     FilesSink sink(files);
     const std::unique_ptr<FrameSource> source = openFrameSource(sequence.string(), options, range);
-    s = runSequence(*source, c, {&sink});
+    std::optional<SavedMap> map;  // read and checked before anything is written, as `run --map-in`
+    if (map_in) map = readMapFor(map_in->string(), out_dir.string(), source->camera(), c.slam);
+    RunControl control;
+    control.map_in = map ? &*map : nullptr;
+    s = runSequence(*source, c, {&sink}, control);
   }
   // summary.json's figures, then what a Python caller needs besides.
   py::dict out = py::module_::import("json").attr("loads")(toJson(s).dump());
@@ -112,10 +117,13 @@ void bindTools(py::module_& m) {
   m.def("run", &run, py::arg("sequence"), py::arg("out_dir"), py::arg("config") = py::none(),
         py::arg("frames") = py::none(), py::arg("camera") = py::none(), py::arg("depth_scale") = 5000.0,
         py::arg("undistort") = true, py::arg("overwrite") = false, py::arg("export_map") = true,
+        py::arg("map_in") = py::none(),
         "run(sequence, out_dir, config=None, frames=None, camera=None, depth_scale=5000.0, undistort=True, "
-        "overwrite=False, export_map=True) -> dict: `flowfusion run` in-process (the same loop, start pose and "
-        "files); the dict holds the trajectory (Nx8) and the run's summary. ValueError, before anything is "
-        "written, when out_dir is, contains or lies inside the sequence, or another process writes into it.");
+        "overwrite=False, export_map=True, map_in=None) -> dict: `flowfusion run` in-process (the same loop, start "
+        "pose and files); the dict holds the trajectory (Nx8) and the run's summary. map_in: a previous run's "
+        "folder (or its map.ffmap) to continue in, as `run --map-in`. ValueError, before anything is written, "
+        "when out_dir is, contains or lies inside the sequence or map_in, when map_in is not a map this sequence "
+        "can continue in, or when another process writes into out_dir.");
 }
 
 }  // namespace ff::py_bind

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "flowfusion/slam/map_file.h"
 #include "testing/test_util.h"
 
 namespace fs = std::filesystem;
@@ -102,6 +103,57 @@ TEST(CliErrors, ReportOnAMalformedSummaryOrBadMaxPoints) {
   EXPECT_EQ(array.status, 2) << array.output;
   EXPECT_NE(array.output.find("summary.json: expected a JSON object"), std::string::npos) << array.output;
   EXPECT_EQ(array.output.find("internal error"), std::string::npos) << array.output;
+}
+
+// A map file of `camera` with one blank keyframe at the default keyframe images' sizes.
+void writeMapOf(const CameraIntrinsics& camera, const fs::path& path) {
+  SavedMap map;
+  map.camera = camera;
+  auto k = std::make_shared<KeyframeImages>();
+  k->camera = camera.atLevel(map.keyframe_level);
+  const cv::Size size(k->camera.width, k->camera.height);
+  const cv::Size small(map.fern_image_width, map.fern_image_width * camera.height / camera.width);
+  k->intensity = cv::Mat(size, CV_8U, cv::Scalar(0));
+  k->depth = cv::Mat(size, CV_16U, cv::Scalar(0));
+  k->static_weight = cv::Mat(size, CV_8U, cv::Scalar(255));
+  k->small_bgr = cv::Mat(small, CV_8UC3, cv::Scalar(0, 0, 0));
+  k->small_depth = cv::Mat(small, CV_32F, cv::Scalar(0));
+  map.keyframes.push_back({SE3::Identity(), k});
+  writeMapFile(path.string(), map);
+}
+
+TEST(CliErrors, RunRefusesABadMapInByNameWritingNothing) {
+  testing::TempDir tmp;
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
+  const fs::path out = tmp.path() / "out";
+  const auto refused = [&](const fs::path& map_in, const std::string& reason) {
+    const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(out) + " --map-in " +
+                                          shellArg(map_in) + " --quiet");
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find(map_in.string()), std::string::npos) << "names the map: " << r.output;
+    EXPECT_NE(r.output.find(reason), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << "wrote " << out << " for " << map_in;
+  };
+  refused(tmp.path() / "no_run", "no map file there");
+  std::ofstream(tmp.path() / "junk.ffmap") << "not a map\n";
+  refused(tmp.path() / "junk.ffmap", "not a flowfusion map file");
+  writeMapOf({100, 100, 63.5, 47.5, 128, 96}, tmp.path() / "other_camera.ffmap");
+  refused(tmp.path() / "other_camera.ffmap", "the map is of another camera: 128x96");
+  writeMapOf({50, 50, 31.5, 23.5, 64, 48}, tmp.path() / "same_camera.ffmap");
+  const auto off = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(out) + " --map-in " +
+                                          shellArg(tmp.path() / "same_camera.ffmap") +
+                                          " --set slam.loop_closure=off --quiet");
+  EXPECT_EQ(off.status, 2) << off.output;
+  EXPECT_NE(off.output.find("needs loop closure"), std::string::npos) << off.output;
+  // Into the map's own run folder: refused, its files untouched even with --overwrite.
+  const fs::path run1 = tmp.path() / "run1";
+  fs::create_directories(run1);
+  fs::copy_file(tmp.path() / "same_camera.ffmap", run1 / kMapFileName);
+  const auto into = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(run1) + " --map-in " +
+                                           shellArg(run1) + " --overwrite --quiet");
+  EXPECT_EQ(into.status, 2) << into.output;
+  EXPECT_NE(into.output.find("is the --map-in map"), std::string::npos) << into.output;
+  EXPECT_EQ(std::distance(fs::directory_iterator(run1), fs::directory_iterator{}), 1);
 }
 
 }  // namespace

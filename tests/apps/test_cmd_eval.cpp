@@ -65,6 +65,17 @@ TEST(CmdEval, AtePrintsTheScriptsLines) {
   EXPECT_EQ(runFlowfusion("eval ate --max-diff 0.003 " + f.gt + " " + f.est).status, 2);
 }
 
+TEST(CmdEval, AteWithoutAlignmentComparesThePosesAsTheyStand) {
+  TrajectoryFiles f;
+  const auto expected =
+      computeAte(readTrajectory(f.gt), readTrajectory(f.est), 0.02, "gt", "est", AteAlignment::None);
+  const auto r = runFlowfusion("eval ate --no-align " + f.gt + " " + f.est);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NEAR(valueAfter(r.output, "absolute_translational_error.rmse"), expected.translation_m.rmse, 1e-6);
+  // The copy is moved by 0.5 rad and (1, 2, 3) m: metres away unaligned, millimetres aligned.
+  EXPECT_GT(expected.translation_m.rmse, 1.0);
+}
+
 TEST(CmdEval, RpePrintsErrorsAndRates) {
   TrajectoryFiles f;
   const auto expected = computeRpe(readTrajectory(f.gt), readTrajectory(f.est), 0.5);

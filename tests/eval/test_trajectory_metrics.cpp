@@ -87,6 +87,21 @@ TEST(Ate, RigidlyMovedCopyAlignsToZero) {
   EXPECT_LT(rpe.rotation_deg.rmse, 1e-5);  // arccos of a trace near 3 resolves ~1e-6 deg
 }
 
+TEST(Ate, WithoutAlignmentAMovedCopyKeepsItsOffset) {
+  const auto gt = wobblyTrajectory(200, 0.03);
+  Trajectory est = gt;
+  for (auto& p : est) p.T_world_cam.translation() += Eigen::Vector3d(0.03, 0.0, -0.04);  // 5 cm away
+  const auto r = computeAte(gt, est, 0.02, "gt", "est", AteAlignment::None);
+  EXPECT_NEAR(r.translation_m.rmse, 0.05, 1e-12);
+  EXPECT_NEAR(r.translation_m.min, 0.05, 1e-12);
+  EXPECT_TRUE(r.T_gt_est.matrix().isIdentity(0));
+  EXPECT_LT(computeAte(gt, est).translation_m.rmse, 1e-9);  // the alignment takes it away
+  // One pose is enough to compare without aligning.
+  const Trajectory one(est.begin(), est.begin() + 1);
+  EXPECT_EQ(computeAte(gt, one, 0.02, "gt", "est", AteAlignment::None).matched_poses, 1u);
+  EXPECT_THROW(computeAte(gt, one), InputError);
+}
+
 TEST(Ate, GaussianPositionNoiseGivesSigmaSqrt3) {
   const double sigma = 0.01;
   const auto gt = wobblyTrajectory(5000, 0.03);

@@ -102,14 +102,15 @@ void to_json(nlohmann::json& j, const RpeResult& r) {
 }
 
 AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s, const std::string& gt_name,
-                     const std::string& est_name) {
+                     const std::string& est_name, AteAlignment alignment) {
   if (!(max_diff_s > 0)) throw InputError("--max-diff: must be positive, got " + fmtShort(max_diff_s));
   const auto matches = associateStamps(stampsOf(gt), stampsOf(est), max_diff_s);
-  if (matches.size() < 3)
+  const size_t needed = alignment == AteAlignment::Horn ? 3 : 1;
+  if (matches.size() < needed)
     throw InputError(gt_name + " vs " + est_name + ": only " + std::to_string(matches.size()) +
-                     " poses have timestamps within " + fmt(max_diff_s) +
-                     " s of each other (at least 3 are needed to align the trajectories; do they cover the "
-                     "same sequence?)");
+                     " poses have timestamps within " + fmt(max_diff_s) + " s of each other (at least " +
+                     std::to_string(needed) + (needed > 1 ? " are needed to align the trajectories" : " is needed") +
+                     "; do they cover the same sequence?)");
   const Eigen::Index n = static_cast<Eigen::Index>(matches.size());
   Eigen::Matrix3Xd model(3, n), data(3, n);  // model = EST, data = GT, as align(second, first)
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -127,8 +128,10 @@ AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_dif
 
   AteResult r;
   r.matched_poses = matches.size();
-  r.T_gt_est.linear() = R;
-  r.T_gt_est.translation() = data_mean - R * model_mean;
+  if (alignment == AteAlignment::Horn) {
+    r.T_gt_est.linear() = R;
+    r.T_gt_est.translation() = data_mean - R * model_mean;
+  }
   std::vector<double> err(matches.size());
   for (Eigen::Index k = 0; k < n; ++k)
     err[static_cast<size_t>(k)] = (r.T_gt_est * Eigen::Vector3d(model.col(k)) - data.col(k)).norm();

@@ -45,8 +45,13 @@ void to_json(nlohmann::json& j, const RpeResult& r);
 // max_diff_s, align EST positions onto GT in closed form (Horn/Kabsch, rotation + translation),
 // statistics of the remaining position errors. gt_name/est_name (file names) go into errors:
 // InputError when fewer than 3 poses associate or max_diff_s is not positive.
+// With AteAlignment::None the estimate is compared as it stands (T_gt_est identity, one pose is
+// enough): for a run that claims to be in the ground truth's world frame (`run --map-in` in a map
+// whose run started at the ground truth's pose).
+enum class AteAlignment { Horn, None };
 AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s = 0.02,
-                     const std::string& gt_name = "ground truth", const std::string& est_name = "estimate");
+                     const std::string& gt_name = "ground truth", const std::string& est_name = "estimate",
+                     AteAlignment alignment = AteAlignment::Horn);
 
 // RPE as evaluate_rpe.py GT EST --fixed_delta --delta delta_s --delta_unit s --max_pairs 0 (every
 // pair, no random subsampling): for every estimated pose i, j = the estimated pose whose stamp is

@@ -145,6 +145,12 @@ class StaticMap {
   // later integrations than the list holds stay. One pass over the surfels (static_map_correction.cpp).
   void moveSurfels(const std::vector<SE3>& T_new_old_by_integration);
 
+  // Before the first integrate(): the surfels of a saved map (slam/map_file.h) this run continues
+  // in, kept as they were (geometry, colour, confidence) and taken as made before this run
+  // (Surfel::created and last_seen -1, no votes): they stay when a loop closure of this run moves
+  // its own surfels, and leave only by the free-space and dynamic votes. Up to max_surfels.
+  void loadSurfels(const std::vector<Surfel>& surfels);
+
   size_t size() const { return surfels_.size(); }
   bool budgetReached() const { return budget_reached_; }
   const std::vector<Surfel>& surfels() const { return surfels_; }

@@ -16,6 +16,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The frame found in a saved map is aligned to the map's rendering at its pose until a step moves
+// it by less than this, at most kMaxMapRefinements times (each a rendering and an odometry). On the
+// test's room, 1, 2, 4 alignments: 7.9 cm off the truth -> 1.8, 1.3 cm (test_map_reuse.cpp).
+constexpr int kMaxMapRefinements = 5;
+constexpr double kMapRefinedStepM = 0.001, kMapRefinedStepDeg = 0.1;
+
 const SystemConfig& validated(const SystemConfig& config) {
   validate(config);
   return config;
@@ -23,7 +29,8 @@ const SystemConfig& validated(const SystemConfig& config) {
 
 }  // namespace
 
-FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera, const SE3& T_world_first)
+FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera, const SE3& T_world_first,
+                                   const SavedMap* map_in)
     : config_(validated(config)),
       camera_(camera),
       odometry_(config.odometry),
@@ -33,6 +40,46 @@ FlowFusionSystem::FlowFusionSystem(const SystemConfig& config, const CameraIntri
   if (config_.pipeline.segmentation) segmentation_ = std::make_unique<SegmentationLoop>(config_, camera_);
   if (config_.pipeline.fusion) map_ = std::make_unique<StaticMap>(config_.fusion);
   slam_ = makeSlamBackEnd(config_.slam, config_.odometry, camera_, &slam_note_);
+  if (map_in) continueIn(*map_in);
+}
+
+void FlowFusionSystem::continueIn(const SavedMap& map) {
+  if (!slam_)
+    throw InputError(map.path + ": continuing in a saved map needs loop closure (slam.loop_closure ferns" +
+                     (slam_note_.empty() ? std::string() : "; " + slam_note_) + ")");
+  checkMapFits(map, camera_, config_.slam);
+  slam_->loadKeyframes(map.keyframes);
+  if (map_) map_->loadSurfels(map.surfels);
+  map_reuse_ = MapReuse{map.path, static_cast<int>(map.keyframes.size()), map.surfels.size()};
+}
+
+SE3 FlowFusionSystem::refinedInSavedMap(const OdometryFrame& cur, const SE3& T_world_cam) const {
+  if (!map_) return T_world_cam;
+  SE3 T = T_world_cam;
+  for (int i = 0; i < kMaxMapRefinements; ++i) {
+    const ModelPrediction p = map_->predict(T, camera_);
+    const OdometryFrame target = prepareOdometryFrame(p.intensity, p.depth, camera_, config_.odometry);
+    const OdometryResult r = odometry_.estimate(cur, target, SE3::Identity(), {}, {});
+    if (!r.ok) break;
+    T = orthonormalized(T * r.T_target_source);
+    if (translationNorm(r.T_target_source) < kMapRefinedStepM && rotationAngleDeg(r.T_target_source) < kMapRefinedStepDeg)
+      break;
+  }
+  return T;
+}
+
+bool FlowFusionSystem::localizeInSavedMap(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result) {
+  StageTimer timer(timings_, "relocalization");
+  const std::optional<SE3> found = slam_->relocalize(frame, {});
+  if (!found) {
+    ++map_reuse_->unlocalized_frames;
+    result.tracking_ok = result.has_pose = false;
+    result.message = "not localized in the saved map yet: no keyframe matches";
+    return false;
+  }
+  map_reuse_->localized_at_frame = static_cast<int>(frame_ms_.size());
+  T_world_first_ = refinedInSavedMap(cur, *found);
+  return true;
 }
 
 OdometryFrame FlowFusionSystem::prepare(const RgbdFrame& frame) {
@@ -69,10 +116,15 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   timings_.beginFrame(frame.timestamp);
   applyLoopCorrections();
   OdometryFrame cur = prepare(frame);
+  if (map_reuse_ && map_reuse_->localized_at_frame < 0 && !localizeInSavedMap(frame, cur, result)) {
+    result.dynamic_mask = cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0));
+    frame_ms_.push_back(msSince(start));
+    return result;
+  }
   cv::Mat scores;  // b per pixel at the segmentation level
   if (!targets_.previous()) {
     result.T_world_cam = T_world_first_;
-    result.message = "first frame";
+    result.message = map_reuse_ ? "localized in the saved map" : "first frame";
   } else {
     scores = track(frame, cur, result);
     if (!result.tracking_ok && slam_) relocalize(frame, result, scores);

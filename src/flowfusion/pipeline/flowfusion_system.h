@@ -5,6 +5,7 @@
 #include <chrono>
 #include <future>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "flowfusion/pipeline/system_config.h"
 #include "flowfusion/pipeline/tracking_target.h"
 #include "flowfusion/slam/loop_closer.h"
+#include "flowfusion/slam/map_file.h"
 
 namespace ff {
 
@@ -24,6 +26,8 @@ struct FrameResult {
   double timestamp = 0;
   SE3 T_world_cam = SE3::Identity();
   bool tracking_ok = true;
+  // False before a run continuing in a saved map is localized in it: T_world_cam means nothing.
+  bool has_pose = true;
   std::string message;          // what the tracker did when it did not simply succeed
   bool used_model = false;      // aligned to the map prediction (frame_to_model or a model keyframe)
   bool restarted_from_flow = false;  // the odometry was restarted from the flow's rigid consensus
@@ -32,11 +36,26 @@ struct FrameResult {
   cv::Mat scores;               // CV_32F b per pixel at the segmentation level (empty when off)
 };
 
+// A run continuing in a saved map (`run --map-in`): where it came from and when the run found
+// itself in it.
+struct MapReuse {
+  std::string path;
+  int keyframes = 0;           // loaded
+  size_t surfels = 0;          // loaded
+  int localized_at_frame = -1; // the first frame whose pose was found in it (-1: none yet)
+  int unlocalized_frames = 0;  // frames before that: no pose, not fused, not in the trajectory
+};
+
 class FlowFusionSystem {
  public:
-  // Throws InputError naming the first bad setting.
+  // Throws InputError naming the first bad setting. With `map_in` (slam/map_file.h) the run
+  // continues in a saved map: its surfels and keyframes are loaded, each frame is sought against
+  // the keyframes (as a relocalization) until one is found, and from that frame on the run tracks
+  // and fuses in the saved map's world frame (T_world_first is not used); the frames before have
+  // no pose. An InputError naming the map file when it does not fit (checkMapFits) or loop
+  // closure is off.
   FlowFusionSystem(const SystemConfig& config, const CameraIntrinsics& camera,
-                   const SE3& T_world_first = SE3::Identity());
+                   const SE3& T_world_first = SE3::Identity(), const SavedMap* map_in = nullptr);
   // Neither copied nor moved: the stages running beside others hold `this`.
   FlowFusionSystem(const FlowFusionSystem&) = delete;
   FlowFusionSystem& operator=(const FlowFusionSystem&) = delete;
@@ -65,6 +84,13 @@ class FlowFusionSystem {
   int lostFrames() const { return lost_frames_; }
   int relocalizedFrames() const { return relocalized_frames_; }
   int slamKeyframes() const { return slam_ ? slam_->keyframes() : 0; }
+  // The loop closer's keyframes at their corrected poses (a saved map's first), for the run's map
+  // file; empty without loop closure. Call after finishLoopClosure().
+  std::vector<SavedKeyframe> savedKeyframes() const {
+    return slam_ ? slam_->savedKeyframes() : std::vector<SavedKeyframe>{};
+  }
+  // Set when the run continues in a saved map.
+  const std::optional<MapReuse>& mapReuse() const { return map_reuse_; }
   // Why loop closure is off although configured (a build without Ceres); empty otherwise.
   const std::string& loopClosureNote() const { return slam_note_; }
   // The map up to the last processed frame (waits for that frame's fusion).
@@ -97,6 +123,15 @@ class FlowFusionSystem {
   // After a failed tracking (with loop closure): the frame's pose from the keyframes; found, the
   // frame counts as tracked and the tracking targets start again from it (timed as "relocalization").
   void relocalize(const RgbdFrame& frame, FrameResult& result, cv::Mat& scores);
+  // The constructor's part for a saved map.
+  void continueIn(const SavedMap& map);
+  // Until the run is found in the saved map: seeks the frame against its keyframes; found, the
+  // frame becomes the run's first, at that pose aligned to the map (refinedInSavedMap). Returns
+  // whether the frame has a pose.
+  bool localizeInSavedMap(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
+  // The pose found against one keyframe's small images, aligned to the whole map's rendering there
+  // (colour and depth, as frame-to-model tracking; unchanged without a map or when that fails).
+  SE3 refinedInSavedMap(const OdometryFrame& cur, const SE3& T_world_cam) const;
   // Waits for the fusion started last, if one is running, and adds its time to timings_.
   void finishFusion() const;
   // The pose reported at the colour image's time, moved from the depth image's along the last motion.
@@ -124,6 +159,7 @@ class FlowFusionSystem {
   std::string slam_note_;
   int lost_frames_ = 0;
   int relocalized_frames_ = 0;
+  std::optional<MapReuse> map_reuse_;
   // The fusion running on a worker (its duration in ms); last, so it ends before the map goes.
   mutable std::future<double> fusion_;
 };

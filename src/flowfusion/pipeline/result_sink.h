@@ -50,6 +50,9 @@ struct RunSummary {
   int slam_keyframes = 0;     // keyframes of the loop closer
   int lost_frames = 0;        // with loop closure: frames whose tracking failed (left out of the map)
   int relocalized_frames = 0; // of those, the ones whose pose was found again against the keyframes
+  std::optional<MapReuse> map_in;  // the saved map the run continued in (`run --map-in`)
+  // The loop closer's keyframes at their corrected poses, for the run's map file (slam/map_file.h).
+  std::vector<SavedKeyframe> keyframes;
   double mean_rounds = 0;     // segmentation <-> odometry rounds per frame (FrameResult::iterations)
   double load_ms_median = 0;  // waiting for the next frame (reading, decoding not hidden by the read-ahead)
   double frame_ms_median = 0;  // FlowFusionSystem::process wall time per frame (its frameMs())
@@ -64,7 +67,8 @@ struct RunSummary {
 };
 
 // The summary's figures as summary.json holds them (complete, stop_reason when not, frames, failures,
-// restarts, loop closure (loop_closure, loop_closures, loop_corrections, slam_keyframes, lost_frames, relocalized_frames), rounds, map, memory, load and export times, per-stage timings, notes; a live run's
+// restarts, loop closure (loop_closure, loop_closures, loop_corrections, slam_keyframes, lost_frames, relocalized_frames),
+// map_in (path, keyframes, surfels, localized_at_frame, unlocalized_frames) when the run continued in a saved map, rounds, map, memory, load and export times, per-stage timings, notes; a live run's
 // frames_offered, frames_processed, frames_dropped, latency_ms_p50 and latency_ms_p95).
 nlohmann::json toJson(const RunSummary& summary);
 

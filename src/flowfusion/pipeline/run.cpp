@@ -30,6 +30,12 @@ nlohmann::json toJson(const RunSummary& summary) {
   j["slam_keyframes"] = summary.slam_keyframes;
   j["lost_frames"] = summary.lost_frames;
   j["relocalized_frames"] = summary.relocalized_frames;
+  if (const std::optional<MapReuse>& m = summary.map_in)
+    j["map_in"] = {{"path", m->path},
+                   {"keyframes", m->keyframes},
+                   {"surfels", m->surfels},
+                   {"localized_at_frame", m->localized_at_frame},
+                   {"unlocalized_frames", m->unlocalized_frames}};
   j["mean_rounds"] = summary.mean_rounds;
   j["map_surfels"] = summary.map_surfels;
   j["map_budget_reached"] = summary.map_budget_reached;
@@ -60,6 +66,12 @@ void summariseSystem(RunSummary& s, const FlowFusionSystem& system, long summed_
   s.lost_frames = system.lostFrames();
   s.relocalized_frames = system.relocalizedFrames();
   if (!system.loopClosureNote().empty()) s.notes.push_back(system.loopClosureNote());
+  s.map_in = system.mapReuse();
+  if (s.map_in && s.map_in->localized_at_frame < 0)
+    s.notes.push_back("never localized in the saved map " + s.map_in->path + ": none of the " +
+                      std::to_string(s.map_in->unlocalized_frames) +
+                      " frames matched its keyframes, so the trajectory holds no poses and nothing was fused");
+  s.keyframes = system.savedKeyframes();
   s.tracking_failures = system.trackingFailures();
   s.flow_restarts = system.flowRestarts();
   if (!system.frameMs().empty()) s.frame_ms_median = median(system.frameMs());
@@ -169,7 +181,8 @@ RunSummary runSequence(FrameSource& source, const SystemConfig& config, const st
       }
       // The first frame's time gives the start pose from the ground truth.
       if (!system)
-        system = std::make_unique<FlowFusionSystem>(config, source.camera(), initialPose(source, frame->timestamp));
+        system = std::make_unique<FlowFusionSystem>(config, source.camera(), initialPose(source, frame->timestamp),
+                                                    control.map_in);
       const FrameResult r = system->process(*frame);
       if (live) live->processed();
       for (ResultSink* sink : sinks) sink->frame(*frame, r);

@@ -22,6 +22,9 @@ struct RunControl {
   // trajectory up to that frame): a live node publishes its map now and then and saves on request
   // (ros/). The system lives until runSequence returns.
   std::function<void(const FlowFusionSystem&)> after_frame = {};
+  // A previous run's map to continue in (`run --map-in`; FlowFusionSystem's map_in): the run's
+  // poses are found in its world frame instead of starting at the ground truth's first pose.
+  const SavedMap* map_in = nullptr;
 };
 
 // The ground truth's pose at `timestamp` (s) when the source has one, else identity.

@@ -15,6 +15,7 @@
 #include "flowfusion/core/error.h"
 #include "flowfusion/core/timings.h"
 #include "flowfusion/io/tum_sequence.h"
+#include "flowfusion/slam/map_file.h"
 #include "flowfusion/visualization/overlay.h"
 #include "flowfusion/visualization/map_preview.h"
 
@@ -117,6 +118,8 @@ FilesSink::~FilesSink() = default;
 
 void FilesSink::begin(const RunInfo& info) {
   source_ = info.frames;
+  camera_ = info.camera;
+  slam_ = info.config.slam;
   // Absolute, so that `report` finds the sequence from any folder.
   std::error_code ec;
   source_name_ = info.frames && fs::exists(info.source, ec) ? fs::absolute(info.source).lexically_normal().string()
@@ -171,6 +174,10 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
     summary.notes.push_back("no map written: the run did not complete");
     return;
   }
+  if (summary.map_in && summary.map_in->localized_at_frame < 0) {
+    summary.notes.push_back("no map written: the run never localized in the saved map (it holds only that map)");
+    return;
+  }
   if (!map.hasStableSurfels()) {
     summary.notes.push_back("no map written: the map holds no stable surfels (too few frames or no valid depth)");
     return;
@@ -179,10 +186,16 @@ void FilesSink::exportMap(RunSummary& summary, const StaticMap& map) const {
   map.exportMesh((out / "map.ply").string());
   map.exportPointCloud((out / "map_points.ply").string());
   writePreviews(map, (out / "preview").string());
-  summary.export_ms = msSince(start);
   summary.written.push_back((out / "map.ply").string());
   summary.written.push_back((out / "map_points.ply").string());
   summary.written.push_back((out / "preview").string() + "/");
+  if (summary.keyframes.empty()) {
+    summary.notes.push_back(std::string("no ") + kMapFileName + " written: no keyframes (loop closure off)");
+  } else {
+    writeMapFile((out / kMapFileName).string(), savedMap(&map, summary.keyframes, camera_, slam_));
+    summary.written.push_back((out / kMapFileName).string());
+  }
+  summary.export_ms = msSince(start);
 }
 
 void FilesSink::end(RunSummary& summary, const StaticMap* map) {

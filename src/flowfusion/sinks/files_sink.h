@@ -1,7 +1,8 @@
 #pragma once
 // The result sink that writes a run's files into one output folder (what `flowfusion run`
 // leaves): config.json at the start, masks/ and overlays/ per frame, then trajectory.txt,
-// timings.csv, the map (map.ply, map_points.ply, preview/) and summary.json. Every file is
+// timings.csv, the map (map.ply, map_points.ply, preview/, and map.ffmap for a next run's --map-in:
+// slam/map_file.h) and summary.json. Every file is
 // written atomically; summary.json says whether the run is complete and, if not, why.
 //
 // The masks and overlays are encoded and written on one writer thread, so the PNG encoding does
@@ -23,7 +24,7 @@ struct FilesSinkOptions {
   bool overwrite = false;       // allow a non-empty out_dir
   bool write_masks = true;      // masks/<timestamp>.png, 255 = dynamic, in the source's raw pixels
   bool write_overlays = false;  // overlays/<timestamp>.png: mask over colour, for looking
-  bool export_map = true;       // map.ply, map_points.ply, preview/*.png
+  bool export_map = true;       // map.ply, map_points.ply, preview/*.png, map.ffmap
 };
 
 class FilesSink : public ResultSink {
@@ -50,6 +51,8 @@ class FilesSink : public ResultSink {
 
   FilesSinkOptions options_;
   const FrameSource* source_ = nullptr;
+  CameraIntrinsics camera_;  // for the map file
+  SlamConfig slam_;
   std::string source_name_;
   std::unique_ptr<ImageWriter> writer_;
 };

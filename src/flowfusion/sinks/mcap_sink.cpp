@@ -124,12 +124,14 @@ void McapSink::frame(const RgbdFrame& frame, const FrameResult& result) {
                        .dump());
     calibration_written_ = true;
   }
-  const json p = pose(result.T_world_cam);
-  writer_->write(c.pose, nanos(t), json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"pose", p}}.dump());
-  writer_->write(c.tf, nanos(t),
-                 json{{"timestamp", stamp(t)}, {"parent_frame_id", "world"}, {"child_frame_id", "camera"},
-                      {"translation", p["position"]}, {"rotation", p["orientation"]}}
-                     .dump());
+  if (result.has_pose) {
+    const json p = pose(result.T_world_cam);
+    writer_->write(c.pose, nanos(t), json{{"timestamp", stamp(t)}, {"frame_id", "world"}, {"pose", p}}.dump());
+    writer_->write(c.tf, nanos(t),
+                   json{{"timestamp", stamp(t)}, {"parent_frame_id", "world"}, {"child_frame_id", "camera"},
+                        {"translation", p["position"]}, {"rotation", p["orientation"]}}
+                       .dump());
+  }
   writer_->write(c.color, nanos(t), rawImage(t, frame.color, "bgr8").dump());
   if (!result.dynamic_mask.empty()) writer_->write(c.mask, nanos(t), rawImage(t, result.dynamic_mask, "mono8").dump());
   writer_->write(c.depth, nanos(t), rawImage(t, frame.depth, "32FC1").dump());

@@ -77,7 +77,7 @@ cv::Mat ViewerSink::trajectoryPanel(cv::Size size) const {
 }
 
 void ViewerSink::frame(const RgbdFrame& frame, const FrameResult& result) {
-  path_xy_.emplace_back(result.T_world_cam.translation().x(), result.T_world_cam.translation().y());
+  if (result.has_pose) path_xy_.emplace_back(result.T_world_cam.translation().x(), result.T_world_cam.translation().y());
   if (!open_) return;
   if (shown_ > 0 && cv::getWindowProperty(options_.window, cv::WND_PROP_VISIBLE) < 1) {
     open_ = false;  // closed by the user: the run goes on without drawing

@@ -9,6 +9,7 @@
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/se3.h"
 #include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/slam/slam_config.h"
 
@@ -26,6 +27,13 @@ struct KeyframeImages {
   OdometryFrame odometryFrame(const OdometryConfig& config) const;
   // (1 - b) in [0, 1] at the kept level.
   cv::Mat staticWeights() const;
+};
+
+// A keyframe as a run leaves it for the next (slam/map_file.h): its pose after the last loop
+// closure and its images.
+struct SavedKeyframe {
+  SE3 T_world_kf;
+  std::shared_ptr<const KeyframeImages> images;
 };
 
 // The frame's images at config.keyframe_level; `scores` is b per pixel at any level (empty: all

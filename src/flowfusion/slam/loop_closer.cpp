@@ -4,6 +4,7 @@
 #include <future>
 #include <spdlog/spdlog.h>
 
+#include "flowfusion/core/error.h"
 #include "flowfusion/slam/keyframe.h"
 #include "flowfusion/slam/loop_verifier.h"
 #include "flowfusion/slam/place_index.h"
@@ -43,6 +44,8 @@ class FernLoopCloser final : public SlamBackEnd {
     }
   }
   Trajectory trajectory() const override;
+  void loadKeyframes(const std::vector<SavedKeyframe>& keyframes) override;
+  std::vector<SavedKeyframe> savedKeyframes() const override;
   int loopClosures() const override { return closures_; }
   int corrections() const override { return corrections_; }
   int keyframes() const override { return static_cast<int>(poses_.size()); }
@@ -62,7 +65,9 @@ class FernLoopCloser final : public SlamBackEnd {
   bool needsKeyframe(const SE3& T_world_cam) const;
   void addKeyframe(const TrackedFrameInfo& info);
   // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
-  CheckResult check(int id, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses);
+  // `localized_from`: the keyframe the run's pose was last found against (the first own
+  // keyframe's odometry edge after a saved map's).
+  CheckResult check(int id, int localized_from, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses);
   // Whether the solve moves some keyframe past slam.min_correction_m / _deg from where it is.
   bool significant(const CheckResult& r) const;
   MapCorrection apply(const CheckResult& r);
@@ -76,6 +81,8 @@ class FernLoopCloser final : public SlamBackEnd {
   std::vector<int> anchors_;  // keyframe per map integration
   int frame_index_ = 0;
   int closures_ = 0;
+  int loaded_ = 0;             // keyframes of a saved map: ids 0 .. loaded_ - 1, fixed
+  int localized_against_ = -1; // the keyframe the last relocalize() found the pose against
   int corrections_ = 0;
   // The background checks' (one at a time, in keyframe order): index, images and graph edges.
   FernIndex index_;
@@ -108,21 +115,26 @@ void FernLoopCloser::addKeyframe(const TrackedFrameInfo& info) {
   auto images = makeKeyframeImages(*info.frame, camera_, info.scores, config_);
   std::shared_future<CheckResult> previous = pending_.empty() ? std::shared_future<CheckResult>() : pending_.back().result;
   std::shared_future<CheckResult> result =
-      std::async(std::launch::async, [this, id, images = std::move(images), poses = poses_, previous]() mutable {
+      std::async(std::launch::async, [this, id, from = localized_against_, images = std::move(images),
+                                      poses = poses_, previous]() mutable {
         if (previous.valid()) previous.wait();
-        return check(id, std::move(images), std::move(poses));
+        return check(id, from, std::move(images), std::move(poses));
       }).share();
   pending_.push_back({frame_index_ + config_.apply_after_frames, std::move(result)});
 }
 
-CheckResult FernLoopCloser::check(int id, std::shared_ptr<const KeyframeImages> images, std::vector<SE3> poses) {
-  // The odometry edge as the tracker measured it, in the poses known when the keyframe was made.
-  if (id > 0)
-    edges_.push_back({id - 1, id, poses[id - 1].inverse() * poses[id], config_.odometry_sigma_m,
+CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<const KeyframeImages> images,
+                                  std::vector<SE3> poses) {
+  // The odometry edge as the tracker measured it, in the poses known when the keyframe was made;
+  // the first after a saved map's from the keyframe its pose was found against.
+  const int from = id == loaded_ ? localized_from : id - 1;
+  if (id > 0 && from >= 0)
+    edges_.push_back({from, id, poses[from].inverse() * poses[id], config_.odometry_sigma_m,
                       config_.odometry_sigma_deg * kDeg, false});
   std::vector<uint8_t> codes = index_.encode(*images);
-  const std::vector<PlaceMatch> matches =
-      index_.query(codes, id - config_.min_keyframe_gap, config_.candidates, config_.min_similarity);
+  // A saved map's keyframes are candidates however recent.
+  const std::vector<PlaceMatch> matches = index_.query(codes, std::max(id - config_.min_keyframe_gap, loaded_ - 1),
+                                                       config_.candidates, config_.min_similarity);
   index_.add(id, std::move(codes));
   images_.push_back(images);
   CheckResult result;
@@ -138,6 +150,7 @@ CheckResult FernLoopCloser::check(int id, std::shared_ptr<const KeyframeImages> 
   if (result.loops > 0) {
     PoseGraphOptions options;
     options.robust_scale = config_.loop_loss_scale;
+    options.fixed_nodes = loaded_;
     result.poses = optimizePoseGraph(poses, edges_, options);
   }
   return result;
@@ -153,9 +166,29 @@ std::optional<SE3> FernLoopCloser::relocalize(const RgbdFrame& frame, const cv::
     const LoopCheck c = verifyLoop(*images, *images_[m.keyframe_id], SE3::Identity(), odometry_, config_);
     spdlog::debug("relocalize: keyframe {} similarity {:.2f}: {}", m.keyframe_id, m.similarity,
                   c.accepted ? "accepted" : c.reason);
-    if (c.accepted) return orthonormalized(poses_[m.keyframe_id] * c.T_candidate_query);
+    if (!c.accepted) continue;
+    localized_against_ = m.keyframe_id;
+    return orthonormalized(poses_[m.keyframe_id] * c.T_candidate_query);
   }
   return std::nullopt;
+}
+
+void FernLoopCloser::loadKeyframes(const std::vector<SavedKeyframe>& keyframes) {
+  if (!poses_.empty()) throw InputError("loop closer: a saved map's keyframes come before the run's own");
+  for (const SavedKeyframe& k : keyframes) {
+    index_.add(static_cast<int>(images_.size()), index_.encode(*k.images));
+    images_.push_back(k.images);
+    poses_.push_back(k.T_world_kf);
+  }
+  loaded_ = static_cast<int>(poses_.size());
+}
+
+std::vector<SavedKeyframe> FernLoopCloser::savedKeyframes() const {
+  for (const Pending& p : pending_) p.result.wait();  // images_ grows on the checks' thread
+  std::vector<SavedKeyframe> out;
+  out.reserve(poses_.size());
+  for (size_t i = 0; i < poses_.size() && i < images_.size(); ++i) out.push_back({poses_[i], images_[i]});
+  return out;
 }
 
 std::optional<MapCorrection> FernLoopCloser::takeCorrection() {

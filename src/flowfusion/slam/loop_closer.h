@@ -18,6 +18,7 @@
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/io/trajectory_io.h"
 #include "flowfusion/odometry/dense_odometry.h"
+#include "flowfusion/slam/keyframe.h"
 #include "flowfusion/slam/slam_config.h"
 
 namespace ff {
@@ -55,6 +56,14 @@ class SlamBackEnd {
   // The trajectory after the last applied correction: each frame's reported pose moved with its
   // keyframe (as tracked until a loop closes).
   virtual Trajectory trajectory() const = 0;
+  // Before the first frame: the keyframes of a saved map (slam/map_file.h, `run --map-in`), indexed
+  // for relocalize() and the loop checks and held fixed in the pose graph: they are the world frame
+  // the run continues in. The run's own first keyframe joins the graph through the keyframe its
+  // pose was found against.
+  virtual void loadKeyframes(const std::vector<SavedKeyframe>& keyframes) = 0;
+  // Every keyframe (loaded ones first) at its pose after the last applied correction, for the
+  // run's map file; waits for the checks still running.
+  virtual std::vector<SavedKeyframe> savedKeyframes() const = 0;
   virtual int loopClosures() const = 0;  // verified loop edges in the graph
   virtual int corrections() const = 0;   // solved graphs applied (past slam.min_correction_m / _deg)
   virtual int keyframes() const = 0;

@@ -1,5 +1,6 @@
 #include "flowfusion/slam/pose_graph.h"
 
+#include <algorithm>
 #include <string>
 
 #include "flowfusion/core/error.h"
@@ -64,9 +65,10 @@ std::vector<SE3> optimizePoseGraph(const std::vector<SE3>& initial, const std::v
     if (!problem.HasParameterBlock(t[i].data())) continue;
     problem.SetManifold(q[i].coeffs().data(), new ceres::EigenQuaternionManifold);  // the problem owns it
   }
-  if (n > 0 && problem.HasParameterBlock(t[0].data())) {
-    problem.SetParameterBlockConstant(t[0].data());
-    problem.SetParameterBlockConstant(q[0].coeffs().data());
+  for (int i = 0; i < std::min(n, std::max(1, options.fixed_nodes)); ++i) {
+    if (!problem.HasParameterBlock(t[i].data())) continue;
+    problem.SetParameterBlockConstant(t[i].data());
+    problem.SetParameterBlockConstant(q[i].coeffs().data());
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

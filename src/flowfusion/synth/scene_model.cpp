@@ -134,7 +134,8 @@ nlohmann::json Sinusoids::describe() const {
   return j;
 }
 
-SE3 CameraPath::T_world_cam(double t) const {
+SE3 CameraPath::T_world_cam(double t_sequence) const {
+    const double t = t_sequence + start_s;
     // Camera looking along world +x with zero angles: cam z = world x, cam x = -world y, cam y = -world z.
     Eigen::Matrix3d R0;
     R0 << 0, 0, 1, -1, 0, 0, 0, -1, 0;
@@ -149,10 +150,12 @@ SE3 CameraPath::T_world_cam(double t) const {
     return T;
   }
 nlohmann::json CameraPath::describe() const {
-  return {{"centre_m", jsonVec(centre)}, {"yaw0_rad", yaw0}, {"pitch0_rad", pitch0},
+  nlohmann::json j = {{"centre_m", jsonVec(centre)}, {"yaw0_rad", yaw0}, {"pitch0_rad", pitch0},
           {"x_m", position[0].describe()}, {"y_m", position[1].describe()}, {"z_m", position[2].describe()},
           {"yaw_rad", yaw.describe()}, {"pitch_rad", pitch.describe()}, {"roll_rad", roll.describe()},
           {"loop_radius_m", loop_radius_m}, {"loop_rate_rad_per_s", loop_rate}};
+  if (start_s != 0) j["start_s"] = start_s;
+  return j;
 }
 
 SE3 CameraRelativePath::T_world_object(double t) const {

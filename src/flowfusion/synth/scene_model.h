@@ -119,6 +119,7 @@ struct CameraPath {
   double loop_rate = 0;  // rad/s round the circle (0: no loop)
   std::array<Sinusoids, 3> position;  // x, y, z offsets, m
   Sinusoids yaw, pitch, roll;         // rad
+  double start_s = 0;                 // the sequence starts this far along the path, s
 
   SE3 T_world_cam(double t) const;  // t: seconds since the sequence start
 

@@ -321,7 +321,7 @@ void makeRpy(CameraPath& cam, const SynthConfig& cfg) {
 // Round the room's centre at the configured speed, looking outwards, with a small hand-held wobble
 // of position (a few cm) and angles (a few degrees) that is not scaled with the speed.
 void makeLoop(CameraPath& cam, const SynthConfig& cfg) {
-  Rng rng(hashCombine(cfg.seed, kLoopStream));
+  Rng rng(hashCombine(cfg.path_seed != 0 ? cfg.path_seed : cfg.seed, kLoopStream));
   cam.loop_radius_m = kLoopRadiusM;
   cam.loop_rate = cfg.camera_speed / kLoopRadiusM;
   cam.position[0] = randomSinusoids(rng, {{0.03, 0.2}, {0.01, 0.5}});
@@ -466,6 +466,8 @@ void validate(const SynthConfig& c) {
     bad("cover_at_s and cover_s must be >= 0 s");
   if (c.laps < 0 || c.laps > 100) bad("laps must be in 0..100, got " + std::to_string(c.laps));
   if (c.laps > 0 && c.camera_path != CameraPathKind::Loop) bad("laps needs camera_path loop");
+  if (!std::isfinite(c.path_start_s) || c.path_start_s < 0) bad("path_start_s must be >= 0 s");
+  if (c.path_seed != 0 && c.camera_path != CameraPathKind::Loop) bad("path_seed needs camera_path loop");
   if (c.camera_path == CameraPathKind::Loop && c.camera_motion != CameraMotion::Handheld)
     bad("camera_path loop takes camera_motion handheld");
   if (c.camera_path == CameraPathKind::Loop && !(c.camera_speed > 0)) bad("camera_path loop needs camera_speed > 0");
@@ -490,6 +492,7 @@ SyntheticScene::SyntheticScene(const SynthConfig& config)
   CameraPath cam = buildRoom(*model_, room_rng, config_);
   if (config_.camera_motion == CameraMotion::Rpy) makeRpy(cam, config_);
   if (config_.camera_path == CameraPathKind::Loop) makeLoop(cam, config_);
+  cam.start_s = config_.path_start_s;
   Rng object_rng(hashCombine(config_.seed, kObjectStream));
   addObjects(*model_, object_rng, config_, cam);
   const WalkLine view = firstView(cam);

@@ -71,6 +71,12 @@ struct SynthConfig {
   // furniture near the centre is left out (the camera would pass through it).
   CameraPathKind camera_path = CameraPathKind::Sweep;
   int laps = 0;  // with camera_path loop: > 0 sets frames to this many laps (0: frames decides)
+  // A second recording of the same room (the room comes from seed alone; ground truth in the same
+  // world frame), for map reuse: the camera path starts this many seconds along (people walk
+  // across the view it starts at), and with camera_path loop its wobble is drawn from path_seed
+  // (0: seed), so the path differs from the first recording's.
+  double path_start_s = 0;
+  uint64_t path_seed = 0;
   // A kidnap: the view covered (black, no depth, as a hand over the lens) for cover_s seconds from
   // cover_at_s after the start, while the camera goes on moving (0: never).
   double cover_at_s = 0;
@@ -81,7 +87,8 @@ struct SynthConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SynthConfig, seed, frames, objects, width, height, fps, start_time,
                                                 camera_speed, camera_angular_speed, object_speed, noise, min_depth,
                                                 max_depth, color_noise, people, seats, near_objects, pushed_objects,
-                                                rest_s, camera_motion, camera_path, laps, cover_at_s, cover_s,
+                                                rest_s, camera_motion, camera_path, laps, path_start_s, path_seed,
+                                                cover_at_s, cover_s,
                                                 exposure_ms,
                                                 exposure_samples)
 
