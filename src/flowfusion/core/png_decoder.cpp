@@ -4,6 +4,7 @@
 
 #include <libdeflate.h>
 
+#include <array>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -84,6 +85,23 @@ inline int paeth(int a, int b, int c) {
   return pa <= pb && pa <= pc ? a : b_or_c;
 }
 
+// The Paeth filter undone for pixels of kBpp bytes, the left and upper-left pixels kept in
+// registers: each byte depends on the one kBpp before, and through memory that chain waited for
+// every store (Paeth is most rows of TUM's colour images; the first pixel's neighbours are 0).
+template <int kBpp>
+bool paethRow(unsigned char* row, const unsigned char* up, size_t n) {
+  std::array<int, kBpp> left{}, up_left{};
+  for (size_t i = 0; i < n; i += kBpp)
+    for (int k = 0; k < kBpp; ++k) {
+      const int above = up[i + k];
+      const int value = (row[i + k] + paeth(left[k], above, up_left[k])) & 0xff;
+      row[i + k] = static_cast<unsigned char>(value);
+      left[k] = value;
+      up_left[k] = above;
+    }
+  return true;
+}
+
 // Undoes scanline `row`'s filter in place, given the row above (zeros for the first); false for
 // an unknown filter type.
 bool unfilter(int type, unsigned char* row, const unsigned char* up, size_t n, size_t bpp) {
@@ -101,10 +119,13 @@ bool unfilter(int type, unsigned char* row, const unsigned char* up, size_t n, s
       for (size_t i = bpp; i < n; ++i) row[i] = static_cast<unsigned char>(row[i] + ((row[i - bpp] + up[i]) >> 1));
       return true;
     case 4:
-      for (size_t i = 0; i < bpp; ++i) row[i] = static_cast<unsigned char>(row[i] + up[i]);
-      for (size_t i = bpp; i < n; ++i)
-        row[i] = static_cast<unsigned char>(row[i] + paeth(row[i - bpp], up[i], up[i - bpp]));
-      return true;
+      switch (bpp) {
+        case 1: return paethRow<1>(row, up, n);
+        case 2: return paethRow<2>(row, up, n);
+        case 3: return paethRow<3>(row, up, n);
+        case 6: return paethRow<6>(row, up, n);
+        default: return false;
+      }
     default:
       return false;
   }
