@@ -1,8 +1,9 @@
 #pragma once
 // A PNG decoder for the kinds of image sequences are stored as (8- and 16-bit grey and colour, not
 // interlaced), over libdeflate, which inflates about twice as fast as zlib: decoding was a fifth
-// of a run's CPU time on TUM frames (colour and depth PNGs, ~10 ms a frame through cv::imread),
-// on the read-ahead thread that shares the cores with the pipeline (docs/performance.md#loading).
+// of a run's CPU time on TUM frames (colour and depth PNGs, ~12 ms a frame through cv::imread),
+// on the read-ahead thread that shares the cores with the pipeline
+// (docs/performance.md#loading-and-cpu-per-frame).
 // Built only with libdeflate (FLOWFUSION_HAVE_LIBDEFLATE); every other PNG is left to OpenCV.
 #include <opencv2/core/mat.hpp>
 #include <optional>
