@@ -1,7 +1,7 @@
 // Micro-benchmarks of optical flow, flow residuals, clustering and the score solve, with
 // accuracy counters measured on the analytic test scene (tests/flow/analytic_scene.h), whose
 // true flow is known: static pixels move by egoFlow() of the true depth and motion.
-//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score|P3P|Ap3p'
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score|P3P|Ap3p|Carry'
 //     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one command line)
 // Counters: epe_px = mean end-point error over static, unoccluded pixels that stay in view;
 // straddle = fraction of clusters with >= 10 % of their pixels on each side of the moving
@@ -23,6 +23,7 @@
 #include "flowfusion/flow/p3p.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/dynamic_score.h"
+#include "flowfusion/segmentation/score_carry.h"
 
 namespace {
 
@@ -108,6 +109,25 @@ void BM_EgoFlowAndResidual(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_EgoFlowAndResidual)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
+
+// The previous frame's scores carried into the current one (score_carry.h; three calls a frame at
+// the segmentation level, 320x240): a splat per pixel, against BM_EgoFlowAndResidual/320, which
+// projects the same pixels once, as its peer in the same run.
+void BM_CarryScores(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const FlowPair p = makePair(width);
+  const auto scene = AnalyticScene::make(width, width * 3 / 4);
+  cv::Mat scores(p.a.frame.depth.size(), CV_32F);
+  cv::randu(scores, 0.0, 1.0);
+  ff::Vector6d xi;
+  xi << 0.01, -0.005, 0.008, 0.01, 0.015, -0.005;  // a hand-held motion at 30 Hz (m, rad)
+  const ff::SE3 T_cur_prev = ff::expSE3(xi);
+  for (auto _ : state) {
+    const cv::Mat carried = ff::carryScores(scores, p.a.frame.depth, scene.camera, T_cur_prev, 0.f);
+    benchmark::DoNotOptimize(carried.data);
+  }
+}
+BENCHMARK(BM_CarryScores)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
 
 void runCluster(benchmark::State& state, const std::string& backend) {
   const int width = static_cast<int>(state.range(0));

@@ -21,6 +21,8 @@ $SUDO apt-get install -y -qq --no-install-recommends librosbag-storage-dev libse
 # from tests/fixtures/ros2bag/package-lock.json, and ESLint for the report page's script from
 # tests/lint/package-lock.json (Node 20 and npm; the tests skip without them).
 $SUDO apt-get install -y -qq --no-install-recommends libzstd-dev liblz4-dev libsqlite3-dev
+# Faster loading of PNG frames (core/png_decoder.cpp); without it OpenCV decodes them, the same pixels.
+$SUDO apt-get install -y -qq --no-install-recommends libdeflate-dev
 # Loop closure (the keyframe pose graph): Ceres; without it flowfusion builds and runs with loop
 # closure off, saying so.
 $SUDO apt-get install -y -qq --no-install-recommends libceres-dev

@@ -17,7 +17,8 @@ std::optional<cv::Size> readPngSize(const std::string& path);
 // cv::imread(path, flags) after the size checks: an InputError naming the file (and `what`) when
 // the PNG header declares more than kMaxImagePixels or, when `expected` is non-empty, another
 // size; an empty Mat when the file is missing or cannot be decoded (the caller's message says
-// which file that is and what it should be).
+// which file that is and what it should be). With libdeflate, plain 8- and 16-bit grey and colour
+// PNGs read IMREAD_UNCHANGED come from our own decoder, the same image (core/png_decoder.h).
 cv::Mat readImageFile(const std::string& path, int flags, const std::string& what, cv::Size expected = {});
 
 }  // namespace ff
