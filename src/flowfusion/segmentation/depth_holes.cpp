@@ -45,15 +45,18 @@ void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_shar
       if (v + 1 < H) count(regions.at<int>(v + 1, u), v, u);
     }
   }
-  enum Label : uchar { kKeep, kStatic, kDynamic };
-  std::vector<Label> label(n, kKeep);
-  for (int r = 1; r < n; ++r)
-    if (neighbours[r] > 0) label[r] = dynamic[r] >= min_dynamic_share * neighbours[r] ? kDynamic : kStatic;
+  std::vector<uchar> fill(n, 0);
+  bool any = false;
+  for (int r = 1; r < n; ++r) {
+    fill[r] = neighbours[r] > 0 && dynamic[r] >= min_dynamic_share * neighbours[r];
+    any = any || fill[r];
+  }
+  if (!any) return;
   for (int v = 0; v < H; ++v) {
     const int* l = regions.ptr<int>(v);
     uchar* m = mask.ptr<uchar>(v);
     for (int u = 0; u < W; ++u)
-      if (label[l[u]] != kKeep) m[u] = label[l[u]] == kDynamic ? 255 : 0;
+      if (fill[l[u]]) m[u] = 255;
   }
 }
 
