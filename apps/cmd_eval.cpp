@@ -35,6 +35,7 @@ struct EvalOptions {
   int every = 2;           // eval map from a sequence: every this many frames
   int pixel_step = 2;      // eval map from a sequence: every this many pixels of a row and column
   double voxel_m = 0.004;  // eval map from a sequence: one truth point per cube of this size
+  std::string align_by;    // eval map: the run's trajectory whose Horn alignment moves TEST
 };
 
 void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
@@ -127,10 +128,11 @@ void printDifference(const char* prefix, const MapDifference& d) {
 }
 
 // A sequence's depth at its ground-truth poses (fusion/map_compare.h, TruthCloud).
-std::vector<Eigen::Vector3f> sequenceTruthCloud(const EvalOptions& o) {
+std::vector<Eigen::Vector3f> sequenceTruthCloud(const EvalOptions& o, Trajectory& groundtruth) {
   const auto source = openFrameSource(o.gt, SequenceOptions{});
   const Trajectory* gt = source->groundtruth();
   if (!gt || gt->empty()) throw InputError("eval map: sequence '" + o.gt + "' has no groundtruth.txt");
+  groundtruth = *gt;
   TruthCloud cloud(o.voxel_m);
   int index = 0, used = 0;
   while (auto frame = source->next()) {
@@ -145,8 +147,17 @@ std::vector<Eigen::Vector3f> sequenceTruthCloud(const EvalOptions& o) {
 }
 
 void runMap(const EvalOptions& o) {
-  const auto reference = std::filesystem::is_directory(o.gt) ? sequenceTruthCloud(o) : readMapPoints(o.gt);
-  const auto r = compareMaps(reference, readMapPoints(o.est), o.threshold_m);
+  const bool sequence = std::filesystem::is_directory(o.gt);
+  Trajectory groundtruth;
+  const auto reference = sequence ? sequenceTruthCloud(o, groundtruth) : readMapPoints(o.gt);
+  auto test = readMapPoints(o.est);
+  if (!o.align_by.empty()) {
+    if (!sequence) throw InputError("eval map --align-by: REFERENCE must be a sequence folder with groundtruth.txt");
+    const SE3 T_gt_est =
+        eval::computeAte(groundtruth, readTrajectory(o.align_by), o.max_diff_s, o.gt, o.align_by).T_gt_est;
+    for (Eigen::Vector3f& p : test) p = (T_gt_est * p.cast<double>()).cast<float>();
+  }
+  const auto r = compareMaps(reference, test, o.threshold_m);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
     return;
@@ -229,6 +240,10 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   map->add_option("--voxel", opts->voxel_m, "REFERENCE a sequence: one point per cube of this size, m")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  map->add_option("--align-by", opts->align_by,
+                  "REFERENCE a sequence: move TEST by the Horn alignment of this trajectory (the run's "
+                  "trajectory.txt) onto the ground truth, as eval ate aligns, so only the map's own "
+                  "inconsistency counts (doubled walls), not where its world frame landed");
   map->add_flag("--json", opts->json, "print the result as JSON");
   map->callback([opts] { runMap(*opts); });
 }};
