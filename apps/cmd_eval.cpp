@@ -14,6 +14,7 @@
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/fusion/map_compare.h"
+#include "flowfusion/io/frame_source.h"
 #include "flowfusion/io/trajectory_io.h"
 #include "flowfusion/report/worst_masks.h"
 
@@ -31,6 +32,10 @@ struct EvalOptions {
   double delta_s = 1.0;
   double threshold_m = 0.03;
   double above = 0.05;  // eval static: a frame counts as falsely marked above this share
+  int every = 2;           // eval map from a sequence: every this many frames
+  int pixel_step = 2;      // eval map from a sequence: every this many pixels of a row and column
+  double voxel_m = 0.004;  // eval map from a sequence: one truth point per cube of this size
+  std::string align_by;    // eval map: the run's trajectory whose Horn alignment moves TEST
 };
 
 void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
@@ -122,8 +127,37 @@ void printDifference(const char* prefix, const MapDifference& d) {
               prefix, d.fraction_beyond);
 }
 
+// A sequence's depth at its ground-truth poses (fusion/map_compare.h, TruthCloud).
+std::vector<Eigen::Vector3f> sequenceTruthCloud(const EvalOptions& o, Trajectory& groundtruth) {
+  const auto source = openFrameSource(o.gt, SequenceOptions{});
+  const Trajectory* gt = source->groundtruth();
+  if (!gt || gt->empty()) throw InputError("eval map: sequence '" + o.gt + "' has no groundtruth.txt");
+  groundtruth = *gt;
+  TruthCloud cloud(o.voxel_m);
+  int index = 0, used = 0;
+  while (auto frame = source->next()) {
+    SE3 T_world_cam;
+    if (index++ % o.every != 0 || !interpolatePose(*gt, frame->depthTime(), T_world_cam)) continue;
+    cloud.addDepth(frame->depth, source->camera(), T_world_cam, o.pixel_step);
+    ++used;
+  }
+  if (cloud.points().empty()) throw InputError("eval map: sequence '" + o.gt + "' gave no depth at a ground-truth pose");
+  std::fprintf(stderr, "truth cloud: %zu points from %d frames of %s\n", cloud.points().size(), used, o.gt.c_str());
+  return cloud.points();
+}
+
 void runMap(const EvalOptions& o) {
-  const auto r = compareMaps(readMapPoints(o.gt), readMapPoints(o.est), o.threshold_m);
+  const bool sequence = std::filesystem::is_directory(o.gt);
+  Trajectory groundtruth;
+  const auto reference = sequence ? sequenceTruthCloud(o, groundtruth) : readMapPoints(o.gt);
+  auto test = readMapPoints(o.est);
+  if (!o.align_by.empty()) {
+    if (!sequence) throw InputError("eval map --align-by: REFERENCE must be a sequence folder with groundtruth.txt");
+    const SE3 T_gt_est =
+        eval::computeAte(groundtruth, readTrajectory(o.align_by), o.max_diff_s, o.gt, o.align_by).T_gt_est;
+    for (Eigen::Vector3f& p : test) p = (T_gt_est * p.cast<double>()).cast<float>();
+  }
+  const auto r = compareMaps(reference, test, o.threshold_m);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
     return;
@@ -193,10 +227,23 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
 
   auto* map = eval->add_subcommand(
       "map", "Nearest-neighbour distances between two map point clouds (map_points.ply), both directions");
-  map->add_option("REFERENCE", opts->gt, "reference point cloud (PLY)")->required();
+  map->add_option("REFERENCE", opts->gt,
+                  "reference point cloud (PLY), or a sequence folder with ground truth: its depth at the "
+                  "ground-truth poses (the room's truth for a synthetic static twin, synth --people 0 --no-noise)")
+      ->required();
   map->add_option("TEST", opts->est, "point cloud compared with the reference (PLY)")->required();
   map->add_option("--threshold", opts->threshold_m, "distance beyond which a point counts as different, m")
       ->capture_default_str();
+  map->add_option("--every", opts->every, "REFERENCE a sequence: every this many frames")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  map->add_option("--pixel-step", opts->pixel_step, "REFERENCE a sequence: every this many pixels")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  map->add_option("--voxel", opts->voxel_m, "REFERENCE a sequence: one point per cube of this size, m")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  map->add_option("--align-by", opts->align_by,
+                  "REFERENCE a sequence: move TEST by the Horn alignment of this trajectory (the run's "
+                  "trajectory.txt) onto the ground truth, as eval ate aligns, so only the map's own "
+                  "inconsistency counts (doubled walls), not where its world frame landed");
   map->add_flag("--json", opts->json, "print the result as JSON");
   map->callback([opts] { runMap(*opts); });
 }};

@@ -189,5 +189,27 @@ TEST(CmdEval, MapReportsTheFractionOfPointsBeyondTheThreshold) {
   EXPECT_NE(missing.output.find("none.ply"), std::string::npos) << missing.output;
 }
 
+// A sequence folder as REFERENCE: its depth at its ground-truth poses. Aligned by the ground truth
+// itself (the identity), the figures are those without alignment; --align-by needs a sequence.
+TEST(CmdEval, MapAgainstASequencesTruth) {
+  ff::testing::TempDir dir;
+  const std::string seq = (dir.path() / "seq").string();
+  ASSERT_EQ(runFlowfusion("synth " + seq + " --frames 4 --width 96 --height 72 --people 0 --objects 0 --no-noise").status,
+            0);
+  const std::string test = writeGridPly(dir.path() / "test.ply", 10);
+  const auto plain = runFlowfusion("eval map " + seq + " " + test + " --threshold 0.03");
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  EXPECT_GT(valueAfter(plain.output, "reference_points"), 100);
+  const auto aligned =
+      runFlowfusion("eval map " + seq + " " + test + " --threshold 0.03 --align-by " + seq + "/groundtruth.txt");
+  ASSERT_EQ(aligned.status, 0) << aligned.output;
+  for (const char* key : {"test_to_reference.mean", "reference_to_test.fraction_beyond_threshold"})
+    EXPECT_NEAR(valueAfter(aligned.output, key), valueAfter(plain.output, key), 1e-6) << key;
+  const auto not_a_sequence =
+      runFlowfusion("eval map " + test + " " + test + " --align-by " + seq + "/groundtruth.txt");
+  EXPECT_EQ(not_a_sequence.status, 2);
+  EXPECT_NE(not_a_sequence.output.find("--align-by"), std::string::npos) << not_a_sequence.output;
+}
+
 }  // namespace
 }  // namespace ff::eval

@@ -78,6 +78,43 @@ TEST(MapCompare, EmptyMapsAndBadThreshold) {
   EXPECT_THROW(compareMaps(points, points, -1.0), InputError);
 }
 
+// A wall 2 m before an 80x60 camera (1/30 m between pixels there), seen from two poses 10 cm
+// apart along the wall (3 pixel columns): the truth holds each wall point once. The voxels are the
+// pixels' spacing with the points at their centres, so no rounding decides which voxel is whose.
+TEST(MapCompare, TruthCloudHoldsAWallSeenTwiceOnceAndFindsItsDoubledCopy) {
+  CameraIntrinsics camera;
+  camera.fx = camera.fy = 60;
+  camera.cx = 39.5;
+  camera.cy = 29.5;
+  camera.width = 80;
+  camera.height = 60;
+  const cv::Mat depth(60, 80, CV_32FC1, cv::Scalar(2.0f));
+  const double voxel_m = 1.0 / 30.0;
+  SE3 here = SE3::Identity(), aside = SE3::Identity();
+  here.translation() = Eigen::Vector3d(0, 0, voxel_m / 2);
+  aside.translation() = Eigen::Vector3d(0.1, 0, voxel_m / 2);
+  TruthCloud truth(voxel_m);
+  truth.addDepth(depth, camera, here, 1);
+  truth.addDepth(depth, camera, aside, 1);
+  ASSERT_EQ(truth.points().size(), 80u * 60u + 3u * 60u);
+  for (const auto& p : truth.points()) ASSERT_NEAR(p.z(), 2.0 + voxel_m / 2, 1e-6);
+
+  // The map fused the wall twice, the second copy 5 cm behind the first: half of it is doubled.
+  std::vector<Eigen::Vector3f> doubled = truth.points();
+  for (const auto& p : truth.points()) doubled.push_back(p + Eigen::Vector3f(0, 0, 0.05f));
+  EXPECT_DOUBLE_EQ(mapDifference(doubled, truth.points(), 0.02).fraction_beyond, 0.5);
+  // A wall 1 cm off stays within 2 cm.
+  std::vector<Eigen::Vector3f> near_wall;
+  for (const auto& p : truth.points()) near_wall.push_back(p + Eigen::Vector3f(0, 0, 0.01f));
+  EXPECT_EQ(mapDifference(near_wall, truth.points(), 0.02).fraction_beyond, 0.0);
+
+  TruthCloud every_other(voxel_m);
+  every_other.addDepth(depth, camera, here, 2);
+  EXPECT_EQ(every_other.points().size(), 40u * 30u);
+  EXPECT_THROW(TruthCloud(0.0), InputError);
+  EXPECT_THROW(every_other.addDepth(cv::Mat(60, 80, CV_16UC1), camera, here, 1), InputError);
+}
+
 TEST(MapCompare, ReadsTheExportedPointCloudBack) {
   testing::RoomFixture room;
   room.frames = 3;

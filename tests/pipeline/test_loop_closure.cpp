@@ -1,7 +1,8 @@
 // Loop closure in the system: a camera turning on the spot in a synthetic room comes back to its
 // first view; the loop is found, the trajectory after the closure stays on the truth, and two runs
 // give the same poses whatever the background thread's timing. Covered for a third of a second on
-// its second round, the camera is lost, and found again against the keyframes once it sees.
+// its second round, the camera is lost, and found again against the keyframes once it sees. The
+// second round's keyframes, in views the first round's cover, keep only their pose-graph nodes.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -43,12 +44,13 @@ class LoopClosureSystemTest : public ::testing::Test {
   // Frames [cover_from, cover_to) are blank (no colour, no depth): the view covered; from cover_to on,
   // frame i is seen from pose i + jump (the camera was carried on meanwhile).
   static Run run(LoopClosureMode mode, int frames = kFrames, int cover_from = -1, int cover_to = -1, int jump = 0,
-                 std::vector<FrameResult>* results = nullptr) {
+                 std::vector<FrameResult>* results = nullptr, bool cull_covered = true) {
     SystemConfig config;
     config.pipeline.segmentation = false;  // a static room: the odometry and the map are enough
     config.odometry.finest_level = 0;
     config.slam.loop_closure = mode;
     config.slam.keyframe_level = 0;
+    config.slam.cull_covered_keyframes = cull_covered;
     FlowFusionSystem system(config, scene_->camera(), truth(0));
     for (int i = 0; i < frames; ++i) {
       RgbdFrame f = scene_->renderAt(truth(i >= cover_to && cover_to >= 0 ? i + jump : i), scene_->timestamp(i)).frame;
@@ -67,12 +69,18 @@ class LoopClosureSystemTest : public ::testing::Test {
     return worst;
   }
 
+  // The default run, made once for the tests that compare with it.
+  static const Run& fernsRun() {
+    static const Run r = run(LoopClosureMode::Ferns);
+    return r;
+  }
+
   static inline std::unique_ptr<synth::SyntheticScene> scene_;
 };
 
 TEST_F(LoopClosureSystemTest, ClosesTheLoopReproducibly) {
   if (!loopClosureAvailable()) GTEST_SKIP() << "built without Ceres (libceres-dev): loop closure is off";
-  const Run a = run(LoopClosureMode::Ferns);
+  const Run& a = fernsRun();
   std::printf("[ measured ] %d keyframes, %d loop edges, %d corrections; largest error tracked %.4f m, after "
               "closure %.4f m\n", a.keyframes, a.closures, a.corrections, maxErrorM(a.tracked), maxErrorM(a.closed));
   EXPECT_GE(a.keyframes, 20);
@@ -83,6 +91,18 @@ TEST_F(LoopClosureSystemTest, ClosesTheLoopReproducibly) {
   ASSERT_EQ(a.closed.size(), b.closed.size());
   for (size_t i = 0; i < a.closed.size(); ++i)
     ASSERT_TRUE(a.closed[i].T_world_cam.isApprox(b.closed[i].T_world_cam, 0)) << "frame " << i;
+}
+
+TEST_F(LoopClosureSystemTest, CoveredKeyframesKeepOnlyTheirNodes) {
+  if (!loopClosureAvailable()) GTEST_SKIP() << "built without Ceres (libceres-dev): loop closure is off";
+  const Run& culled = fernsRun();
+  const Run kept = run(LoopClosureMode::Ferns, kFrames, -1, -1, 0, nullptr, /*cull_covered=*/false);
+  std::printf("[ measured ] keyframes kept %d of %d; loop edges %d / %d; largest error after closure %.4f / %.4f m\n",
+              culled.keyframes, kept.keyframes, culled.closures, kept.closures, maxErrorM(culled.closed),
+              maxErrorM(kept.closed));
+  EXPECT_LT(culled.keyframes, kept.keyframes);
+  EXPECT_GE(culled.closures, 1);
+  EXPECT_LT(maxErrorM(culled.closed), maxErrorM(kept.closed) + 0.005);
 }
 
 TEST_F(LoopClosureSystemTest, RelocalizesAfterTheViewWasCovered) {

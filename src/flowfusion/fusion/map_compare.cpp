@@ -136,4 +136,27 @@ std::vector<Eigen::Vector3f> readMapPoints(const std::string& path) {
   return points;
 }
 
+TruthCloud::TruthCloud(double voxel_m) : voxel_m_(voxel_m) {
+  if (!(voxel_m > 0) || !std::isfinite(voxel_m)) throw InputError("truth cloud: the voxel size must be > 0 m");
+}
+
+void TruthCloud::addDepth(const cv::Mat& depth_m, const CameraIntrinsics& camera, const SE3& T_world_cam,
+                          int pixel_step) {
+  if (depth_m.type() != CV_32FC1) throw InputError("truth cloud: depth must be CV_32FC1 metres");
+  const int step = std::max(1, pixel_step);
+  for (int v = 0; v < depth_m.rows; v += step) {
+    const float* row = depth_m.ptr<float>(v);
+    for (int u = 0; u < depth_m.cols; u += step) {
+      if (!(row[u] > 0)) continue;
+      const Eigen::Vector3d p = T_world_cam * camera.backproject(u, v, row[u]);
+      // 21 bits per axis: +-10 km at 1 cm, far beyond a room.
+      uint64_t key = 0;
+      for (int c = 0; c < 3; ++c)
+        key = key << 21 | (static_cast<uint64_t>(static_cast<int64_t>(std::floor(p(c) / voxel_m_)) + (1 << 20)) &
+                           ((1u << 21) - 1));
+      if (voxels_.insert(key).second) points_.push_back(p.cast<float>());
+    }
+  }
+}
+
 }  // namespace ff

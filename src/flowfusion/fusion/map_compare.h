@@ -8,8 +8,13 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <opencv2/core.hpp>
 #include <string>
+#include <unordered_set>
 #include <vector>
+
+#include "flowfusion/core/camera.h"
+#include "flowfusion/core/se3.h"
 
 namespace ff {
 
@@ -38,6 +43,24 @@ MapDifference mapDifference(const std::vector<Eigen::Vector3f>& from, const std:
 // Both directions; same errors as mapDifference.
 MapComparison compareMaps(const std::vector<Eigen::Vector3f>& reference, const std::vector<Eigen::Vector3f>& test,
                           double threshold_m);
+
+// A truth point cloud from depth images at known poses (a synthetic sequence's exact depth at its
+// ground-truth poses: the room's surfaces), thinned to the first point in each voxel_m cube so a
+// surface seen in many frames counts once. The map's share farther than a few centimetres from it
+// is what drift left doubled (a wall fused twice, a few centimetres apart) or ghosts.
+class TruthCloud {
+ public:
+  // Throws InputError when voxel_m is not a positive number.
+  explicit TruthCloud(double voxel_m);
+  // Every pixel_step-th pixel of `depth_m` (CV_32F, metres, 0 = none) in the world frame.
+  void addDepth(const cv::Mat& depth_m, const CameraIntrinsics& camera, const SE3& T_world_cam, int pixel_step);
+  const std::vector<Eigen::Vector3f>& points() const { return points_; }
+
+ private:
+  double voxel_m_;
+  std::unordered_set<uint64_t> voxels_;
+  std::vector<Eigen::Vector3f> points_;
+};
 
 // The points of a point cloud file (PLY as written by StaticMap::exportPointCloud; other formats
 // Open3D reads by extension work too). Throws InputError naming the file when it is missing,

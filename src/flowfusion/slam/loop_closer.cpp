@@ -48,7 +48,7 @@ class FernLoopCloser final : public SlamBackEnd {
   std::vector<SavedKeyframe> savedKeyframes() const override;
   int loopClosures() const override { return closures_; }
   int corrections() const override { return corrections_; }
-  int keyframes() const override { return static_cast<int>(poses_.size()); }
+  int keyframes() const override;
 
  private:
   struct FrameRef {
@@ -135,9 +135,8 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   // A saved map's keyframes are candidates however recent.
   const std::vector<PlaceMatch> matches = index_.query(codes, std::max(id - config_.min_keyframe_gap, loaded_ - 1),
                                                        config_.candidates, config_.min_similarity);
-  index_.add(id, std::move(codes));
-  images_.push_back(images);
   CheckResult result;
+  bool covered = false;
   for (const PlaceMatch& m : matches) {
     const SE3 guess = poses[m.keyframe_id].inverse() * poses[id];
     const LoopCheck c = verifyLoop(*images, *images_[m.keyframe_id], guess, odometry_, config_);
@@ -146,6 +145,15 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
     if (!c.accepted) continue;
     edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg, true});
     ++result.loops;
+    covered = covered || (translationNorm(c.T_candidate_query) <= config_.keyframe_translation_m &&
+                          rotationAngleDeg(c.T_candidate_query) <= config_.keyframe_rotation_deg);
+  }
+  // A covered keyframe stays a node of the graph; the older keyframe it matched stands for its view.
+  if (covered && config_.cull_covered_keyframes) {
+    images_.push_back(nullptr);
+  } else {
+    index_.add(id, std::move(codes));
+    images_.push_back(std::move(images));
   }
   if (result.loops > 0) {
     PoseGraphOptions options;
@@ -187,8 +195,14 @@ std::vector<SavedKeyframe> FernLoopCloser::savedKeyframes() const {
   for (const Pending& p : pending_) p.result.wait();  // images_ grows on the checks' thread
   std::vector<SavedKeyframe> out;
   out.reserve(poses_.size());
-  for (size_t i = 0; i < poses_.size() && i < images_.size(); ++i) out.push_back({poses_[i], images_[i]});
+  for (size_t i = 0; i < poses_.size() && i < images_.size(); ++i)
+    if (images_[i]) out.push_back({poses_[i], images_[i]});
   return out;
+}
+
+int FernLoopCloser::keyframes() const {
+  for (const Pending& p : pending_) p.result.wait();  // images_ grows on the checks' thread
+  return static_cast<int>(index_.size());
 }
 
 std::optional<MapCorrection> FernLoopCloser::takeCorrection() {

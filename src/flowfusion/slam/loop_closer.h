@@ -61,11 +61,13 @@ class SlamBackEnd {
   // the run continues in. The run's own first keyframe joins the graph through the keyframe its
   // pose was found against.
   virtual void loadKeyframes(const std::vector<SavedKeyframe>& keyframes) = 0;
-  // Every keyframe (loaded ones first) at its pose after the last applied correction, for the
-  // run's map file; waits for the checks still running.
+  // Every keyframe kept with its images (loaded ones first) at its pose after the last applied
+  // correction, for the run's map file; waits for the checks still running.
   virtual std::vector<SavedKeyframe> savedKeyframes() const = 0;
   virtual int loopClosures() const = 0;  // verified loop edges in the graph
   virtual int corrections() const = 0;   // solved graphs applied (past slam.min_correction_m / _deg)
+  // Keyframes kept with their images (loaded ones included; slam.cull_covered_keyframes drops the
+  // images of those whose view an older keyframe covers); waits for the checks still running.
   virtual int keyframes() const = 0;
 };
 

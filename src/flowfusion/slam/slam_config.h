@@ -23,6 +23,10 @@ struct SlamConfig {
   // A new keyframe once the camera moved this far from the last one (metres, degrees).
   double keyframe_translation_m = 0.2;
   double keyframe_rotation_deg = 15.0;
+  // A keyframe whose verified loop lands within the keyframe thresholds above of an older keyframe
+  // (its view already covered) keeps only its pose-graph node: its images leave, and it enters
+  // neither the place index nor later checks, so memory follows the space covered, not the laps.
+  bool cull_covered_keyframes = true;
   // Pyramid level of the input a keyframe keeps (1: 320x240 for VGA, about 300 kB a keyframe).
   int keyframe_level = 1;
   // Place index: ferns, each one pixel of an 80x60 image tested against four random thresholds
@@ -59,7 +63,7 @@ struct SlamConfig {
   int apply_after_frames = 10;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlamConfig, loop_closure, keyframe_translation_m,
-                                                keyframe_rotation_deg, keyframe_level, fern_count, fern_image_width,
+                                                keyframe_rotation_deg, cull_covered_keyframes, keyframe_level, fern_count, fern_image_width,
                                                 min_similarity, candidates, min_keyframe_gap, min_inlier_fraction,
                                                 inlier_depth_m, inlier_intensity, max_correction_m,
                                                 max_correction_deg, min_correction_m, min_correction_deg, odometry_sigma_m, odometry_sigma_deg,
