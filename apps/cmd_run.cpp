@@ -112,7 +112,7 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
 
 void execute(const RunCommand& c) {
   if (c.realtime) checkRate(c.rate);
-  const SystemConfig config = c.system.systemConfig();
+  const SystemConfig config = c.system.systemConfig(c.realtime ? liveDefaults() : SystemConfig{});
   FilesSinkOptions files;
   files.out_dir = c.out;
   files.overwrite = c.overwrite;

@@ -59,11 +59,12 @@ struct SystemOptions {
     return openFrameSource(path, sequenceOptions(), frames.empty() ? FrameRange{} : parseFrameRange(frames));
   }
 
-  SystemConfig systemConfig() const {
+  // `defaults` below the --config file and the --set options (liveDefaults() for a live run).
+  SystemConfig systemConfig(const SystemConfig& defaults = SystemConfig{}) const {
     std::vector<std::string> flags;
     if (no_segmentation) flags.push_back("pipeline.segmentation=false");
     if (!tracking.empty()) flags.push_back("pipeline.tracking=\"" + tracking + "\"");
-    SystemConfig c = config.resolve(SystemConfig{}, flags);
+    SystemConfig c = config.resolve(defaults, flags);
     validate(c);
     return c;
   }

@@ -10,6 +10,7 @@
 
 #include "flowfusion/core/config.h"
 #include "flowfusion/io/trajectory_io.h"
+#include "flowfusion/pipeline/system_config.h"
 #include "testing/test_util.h"
 
 namespace ff {
@@ -59,6 +60,19 @@ TEST_F(RealtimeCommand, AFarTooFastReplayDropsFramesAndTheirPosesAndMasks) {
   size_t masks = 0;
   for (const auto& entry : fs::directory_iterator(out("fast") + "/masks")) masks += entry.path().extension() == ".png";
   EXPECT_EQ(masks, processed) << "a dropped frame has no mask";
+}
+
+TEST_F(RealtimeCommand, ALiveRunStartsFromTheLiveFrameBudgetWhichSetStillDecides) {
+  const auto live = testing::runFlowfusion("run " + seq() + " --out " + out("live") + " --realtime --rate 1000 --quiet");
+  ASSERT_EQ(live.status, 0) << live.output;
+  EXPECT_EQ(readJsonFile(out("live") + "/config.json")["pipeline"]["budget_ms"].get<double>(), kLiveBudgetMs);
+  const auto none = testing::runFlowfusion("run " + seq() + " --out " + out("none") +
+                                           " --realtime --rate 1000 --quiet --set pipeline.budget_ms=0");
+  ASSERT_EQ(none.status, 0) << none.output;
+  EXPECT_EQ(readJsonFile(out("none") + "/config.json")["pipeline"]["budget_ms"].get<double>(), 0.0);
+  const auto offline = testing::runFlowfusion("run " + seq() + " --out " + out("plain") + " --frames 0:1 --quiet");
+  ASSERT_EQ(offline.status, 0) << offline.output;
+  EXPECT_EQ(readJsonFile(out("plain") + "/config.json")["pipeline"]["budget_ms"].get<double>(), 0.0);
 }
 
 TEST_F(RealtimeCommand, AnInterruptedLiveRunsCountsAddUp) {

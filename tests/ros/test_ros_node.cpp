@@ -248,7 +248,8 @@ TEST_F(RosNodeTest, PublishesTheOfflineRunsPosesAndMasksAndSavesWhatRunWrites) {
   ASSERT_EQ(offline.poses.size(), size_t(kFrames));
 
   const fs::path saved = tmp.path() / "saved", recorded = tmp.path() / "out.bag";
-  auto node = startNode({"_save_dir:=" + saved.string(), "_map_period_s:=0.05"});
+  // Without the live frame budget, so that every frame is computed as offline whatever the load.
+  auto node = startNode({"_save_dir:=" + saved.string(), "_map_period_s:=0.05", "_set:=pipeline.budget_ms=0"});
   const std::vector<std::string> topics = {"/flowfusion/odometry", "/flowfusion/mask", "/flowfusion/static_cloud",
                                            "/flowfusion/path", "/diagnostics", "/tf"};
   std::vector<std::string> record = {"rosbag", "record", "-O", recorded.string(), "__name:=recorder"};

@@ -46,4 +46,10 @@ void validate(const SystemConfig& c) {
   validate(c.slam, c.odometry.levels);
 }
 
+SystemConfig liveDefaults() {
+  SystemConfig c;
+  c.pipeline.budget_ms = kLiveBudgetMs;
+  return c;
+}
+
 }  // namespace ff

@@ -90,4 +90,13 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SystemConfig, pipeline, odometry
 // Throws InputError naming the first bad setting.
 void validate(const SystemConfig& config);
 
+// The frame budget a live run starts from (run --realtime, the ROS node), ms: nine tenths of a
+// 30 Hz camera's frame interval. A live run's results depend on the machine anyway (what it
+// drops); with the budget a late frame skips its optional parts instead of making the next ones
+// wait (docs/tuning.md#budget_ms).
+constexpr double kLiveBudgetMs = 30;
+// The defaults of a live run: SystemConfig{} with pipeline.budget_ms = kLiveBudgetMs. A
+// configuration file or --set still decides (pipeline.budget_ms=0: no budget).
+SystemConfig liveDefaults();
+
 }  // namespace ff

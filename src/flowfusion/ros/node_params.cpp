@@ -47,7 +47,7 @@ std::vector<std::string> stringList(const ros::NodeHandle& nh, const std::string
 }
 
 SystemConfig resolveLayers(const ros::NodeHandle& nh, const RosNodeOptions& options) {
-  nlohmann::json config = nlohmann::json(SystemConfig{});
+  nlohmann::json config = nlohmann::json(liveDefaults());
   if (!options.config_file.empty()) mergeConfig(config, readJsonFile(options.config_file), options.config_file);
   if (std::string file; nh.getParam("config", file))
     tryLayer(config, "~config=" + file, [&](nlohmann::json& j) { mergeConfig(j, readJsonFile(file), file); });
@@ -75,7 +75,7 @@ void readParam(const ros::NodeHandle& nh, const std::string& key, T& value, cons
 }  // namespace
 
 SystemConfig commandLineConfig(const RosNodeOptions& options) {
-  SystemConfig c = resolveConfig(SystemConfig{}, options.config_file, options.overrides);
+  SystemConfig c = resolveConfig(liveDefaults(), options.config_file, options.overrides);
   validate(c);
   return c;
 }

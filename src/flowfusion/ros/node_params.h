@@ -30,7 +30,7 @@ struct NodeParams {
 // `options` were checked by runRosNode; what the parameters say on top of them.
 NodeParams readNodeParams(const ros::NodeHandle& private_nh, const RosNodeOptions& options);
 
-// The configuration of the command line alone (defaults, --config, --set), checked: InputError naming
+// The configuration of the command line alone (liveDefaults(), --config, --set), checked: InputError naming
 // the bad option.
 SystemConfig commandLineConfig(const RosNodeOptions& options);
 
