@@ -1,6 +1,5 @@
 #include "flowfusion/segmentation/score_carry.h"
 
-#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -48,8 +47,7 @@ cv::Mat carryScores(const cv::Mat& prev_scores, const cv::Mat& prev_depth, const
   cv::Mat zbuf(prev_scores.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
   const Splat splat{out.ptr<float>(), zbuf.ptr<float>(), out.cols, out.rows};
   const int cols = prev_depth.cols;
-  std::vector<double> qzs(cols);
-  std::vector<int32_t> us(cols), vs(cols);
+  std::vector<double> qzs(cols), us(cols), vs(cols);
   const Eigen::Matrix3d R = T_cur_prev.linear();
   const Eigen::Vector3d t = T_cur_prev.translation();
   const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
@@ -60,8 +58,7 @@ cv::Mat carryScores(const cv::Mat& prev_scores, const cv::Mat& prev_depth, const
     const float* z_row = prev_depth.ptr<float>(y);
     // The row's points and pixels in a loop the compiler vectorises: the same double operations,
     // in the same order, as T_cur_prev * cam.backproject(x, y, z) and cam.project(q).
-    double* qz_out = qzs.data();
-    int32_t *u_out = us.data(), *v_out = vs.data();
+    double *qz_out = qzs.data(), *u_out = us.data(), *v_out = vs.data();
     for (int x = 0; x < cols; ++x) {
       const double z = z_row[x];
       const double px = (x - cx) * z / fx, py = (y - cy) * z / fy;
@@ -69,13 +66,14 @@ cv::Mat carryScores(const cv::Mat& prev_scores, const cv::Mat& prev_depth, const
       const double qy = r10 * px + r11 * py + r12 * z + t1;
       const double qz = r20 * px + r21 * py + r22 * z + t2;
       qz_out[x] = qz;
-      u_out[x] = static_cast<int32_t>(fx * qx / qz + cx);
-      v_out[x] = static_cast<int32_t>(fy * qy / qz + cy);
+      u_out[x] = fx * qx / qz + cx;
+      v_out[x] = fy * qy / qz + cy;
     }
     for (int x = 0; x < cols; ++x) {
       if (z_row[x] <= 0 || qzs[x] <= 0) continue;
       // Splat to the 2x2 neighbourhood so that no holes open up.
-      splat.add(us[x], vs[x], qzs[x], b_row[x]);
+      // Cast only here: a pixel without depth or behind the camera may project beyond int's range.
+      splat.add(static_cast<int>(us[x]), static_cast<int>(vs[x]), qzs[x], b_row[x]);
     }
   }
   return out;

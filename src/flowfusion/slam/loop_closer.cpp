@@ -62,6 +62,9 @@ class FernLoopCloser final : public SlamBackEnd {
     std::shared_future<CheckResult> result;
   };
 
+  // Whether two poses lie within slam.keyframe_translation_m and _rotation_deg of each other: a new
+  // keyframe is made beyond that, and a loop found within it covers the keyframe's view.
+  bool withinKeyframeSpacing(const SE3& T_a_b) const;
   bool needsKeyframe(const SE3& T_world_cam) const;
   void addKeyframe(const TrackedFrameInfo& info);
   // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
@@ -92,11 +95,13 @@ class FernLoopCloser final : public SlamBackEnd {
   std::deque<Pending> pending_;
 };
 
+bool FernLoopCloser::withinKeyframeSpacing(const SE3& T_a_b) const {
+  return translationNorm(T_a_b) <= config_.keyframe_translation_m &&
+         rotationAngleDeg(T_a_b) <= config_.keyframe_rotation_deg;
+}
+
 bool FernLoopCloser::needsKeyframe(const SE3& T_world_cam) const {
-  if (poses_.empty()) return true;
-  const SE3 moved = poses_.back().inverse() * T_world_cam;
-  return translationNorm(moved) > config_.keyframe_translation_m ||
-         rotationAngleDeg(moved) > config_.keyframe_rotation_deg;
+  return poses_.empty() || !withinKeyframeSpacing(poses_.back().inverse() * T_world_cam);
 }
 
 void FernLoopCloser::frameTracked(const TrackedFrameInfo& info) {
@@ -145,8 +150,7 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
     if (!c.accepted) continue;
     edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg, true});
     ++result.loops;
-    covered = covered || (translationNorm(c.T_candidate_query) <= config_.keyframe_translation_m &&
-                          rotationAngleDeg(c.T_candidate_query) <= config_.keyframe_rotation_deg);
+    covered = covered || withinKeyframeSpacing(c.T_candidate_query);
   }
   // A covered keyframe stays a node of the graph; the older keyframe it matched stands for its view.
   if (covered && config_.cull_covered_keyframes) {
