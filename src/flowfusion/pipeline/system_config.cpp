@@ -26,6 +26,8 @@ void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
   if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
   if (!(p.mask_hole_share >= 0 && p.mask_hole_share <= 1))
     throw InputError("pipeline.mask_hole_share must be 0 (never) to 1 (a share of the hole's neighbours)");
+  if (!(p.mask_min_region >= 0 && p.mask_min_region < 1))
+    throw InputError("pipeline.mask_min_region must be 0 (keep every region) or a share of the image below 1");
   if (p.fusion_every < 1 || p.fusion_every > 1000) throw InputError("pipeline.fusion_every must be 1 to 1000");
   if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
     throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");
