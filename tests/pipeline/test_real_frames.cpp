@@ -55,7 +55,8 @@ double meanOf(const std::vector<double>& v, int first, int last) {
 }
 
 // Frames first..last of static fr1/rpy: on average at most `fixed` of the pixels marked with the
-// defaults, and more than `cause` with `undo` applied to them (the cause the default fixes).
+// defaults, and more than `cause` with `undo` applied to them (the cause the default fixes) and
+// small marks inside the view kept (clearing them hides most of each cause).
 void expectFixedOnFr1Rpy(int first, int last, double fixed, double cause, void (*undo)(SystemConfig&),
                          const char* why) {
   const auto dir = testing::sharedTum("fr1_rpy_head150");
@@ -65,6 +66,7 @@ void expectFixedOnFr1Rpy(int first, int last, double fixed, double cause, void (
   EXPECT_LT(meanOf(markedShares(seq, config, last), first, last), fixed)
       << "frames " << first << "-" << last << " of static fr1/rpy";
   undo(config);
+  config.pipeline.mask_min_region = 0;
   EXPECT_GT(meanOf(markedShares(seq, config, last), first, last), cause) << "the cause: " << why;
 }
 
@@ -76,10 +78,9 @@ TEST(RealFrames, SurfacesComingIntoViewOfStaticFr1RpyAreNotKeptDynamicByTheDepth
 }
 
 TEST(RealFrames, ThinStructuresOfStaticFr1RpyAreNotMovedByADepthOutOfStepWithTheColour) {
-  // Frames 27-69 (0.9-2.3 s): 0.3 % marked on average with the depth window, 2.8 % without it
-  // (4.4 % before small marks inside the view were dropped).
+  // Frames 27-69 (0.9-2.3 s): 0.3 % marked on average with the depth window, 4.4 % without it.
   expectFixedOnFr1Rpy(
-      27, 69, 0.01, 0.02, [](SystemConfig& c) { c.scores.depth_window_px = 0; }, "desk edges a few pixels off");
+      27, 69, 0.01, 0.03, [](SystemConfig& c) { c.scores.depth_window_px = 0; }, "desk edges a few pixels off");
 }
 
 TEST(RealFrames, SmallMarksInsideTheViewOfStaticFr1RpyAreNotWritten) {
