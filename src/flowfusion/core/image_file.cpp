@@ -3,34 +3,17 @@
 #include <array>
 #include <cstring>
 #include <fstream>
-#include <vector>
 #include <opencv2/imgcodecs.hpp>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/file_bytes.h"
 #include "flowfusion/core/png_decoder.h"
 
 namespace ff {
 
 namespace {
 
-uint32_t bigEndian32(const unsigned char* p) {
-  return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]};
-}
-
 std::string sizeText(long long w, long long h) { return std::to_string(w) + "x" + std::to_string(h); }
-
-#ifdef FLOWFUSION_HAVE_LIBDEFLATE
-// The file's bytes; empty when it cannot be read.
-std::vector<unsigned char> fileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return {};
-  const std::streamsize size = in.tellg();
-  std::vector<unsigned char> bytes(size > 0 ? static_cast<size_t>(size) : 0);
-  in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) return {};
-  return bytes;
-}
-#endif
 
 }  // namespace
 
@@ -58,7 +41,8 @@ cv::Mat readImageFile(const std::string& path, int flags, const std::string& wha
                        " pixels, more than the " + std::to_string(kMaxImagePixels) + " this program decodes");
 #ifdef FLOWFUSION_HAVE_LIBDEFLATE
     if (flags == cv::IMREAD_UNCHANGED)
-      if (std::optional<cv::Mat> image = decodeSimplePng(fileBytes(path))) return std::move(*image);
+      if (const std::optional<std::string> bytes = readFileBytes(path))
+        if (std::optional<cv::Mat> image = decodeSimplePng(*bytes)) return std::move(*image);
 #endif
   }
   try {

@@ -1,5 +1,7 @@
 #include "flowfusion/core/png_decoder.h"
 
+#include "flowfusion/core/file_bytes.h"
+
 #ifdef FLOWFUSION_HAVE_LIBDEFLATE
 
 #include <libdeflate.h>
@@ -14,10 +16,6 @@
 namespace ff {
 
 namespace {
-
-uint32_t bigEndian32(const unsigned char* p) {
-  return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]};
-}
 
 struct PngHeader {
   uint32_t width = 0, height = 0;
@@ -42,15 +40,17 @@ std::optional<PngHeader> parseHeader(const unsigned char* d) {
 }
 
 // The header and the IDAT chunks' contents in order (the zlib stream), each chunk's CRC checked.
-std::optional<std::vector<unsigned char>> readChunks(const std::vector<unsigned char>& f, PngHeader& header) {
+std::optional<std::vector<unsigned char>> readChunks(std::string_view file, PngHeader& header) {
   static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (f.size() < 8 || std::memcmp(f.data(), kSignature, 8) != 0) return std::nullopt;
+  const auto* f = reinterpret_cast<const unsigned char*>(file.data());
+  const size_t size = file.size();
+  if (size < 8 || std::memcmp(f, kSignature, 8) != 0) return std::nullopt;
   std::vector<unsigned char> stream;
   bool have_header = false, in_data = false, data_done = false;
-  for (size_t p = 8; p + 12 <= f.size();) {
-    const uint32_t n = bigEndian32(&f[p]);
-    if (n > f.size() - p - 12) return std::nullopt;
-    const unsigned char* type = &f[p + 4];
+  for (size_t p = 8; p + 12 <= size;) {
+    const uint32_t n = bigEndian32(f + p);
+    if (n > size - p - 12) return std::nullopt;
+    const unsigned char* type = f + p + 4;
     const unsigned char* data = type + 4;
     const std::string_view name(reinterpret_cast<const char*>(type), 4);
     if (name == "IEND") return have_header && (in_data || data_done) ? std::optional(std::move(stream)) : std::nullopt;
@@ -159,7 +159,7 @@ struct DecompressorDeleter {
 
 }  // namespace
 
-std::optional<cv::Mat> decodeSimplePng(const std::vector<unsigned char>& file) {
+std::optional<cv::Mat> decodeSimplePng(std::string_view file) {
   PngHeader h;
   const std::optional<std::vector<unsigned char>> stream = readChunks(file, h);
   if (!stream) return std::nullopt;

@@ -7,7 +7,7 @@
 // Built only with libdeflate (FLOWFUSION_HAVE_LIBDEFLATE); every other PNG is left to OpenCV.
 #include <opencv2/core/mat.hpp>
 #include <optional>
-#include <vector>
+#include <string_view>
 
 namespace ff {
 
@@ -16,6 +16,6 @@ namespace ff {
 // (interlaced, palette, alpha, a transparency chunk, fewer than 8 bits a sample, an unknown
 // critical chunk) and for one with any damage (a chunk's CRC, the zlib stream, the data's size),
 // so that OpenCV gives its image or its error exactly as before.
-std::optional<cv::Mat> decodeSimplePng(const std::vector<unsigned char>& file);
+std::optional<cv::Mat> decodeSimplePng(std::string_view file);
 
 }  // namespace ff

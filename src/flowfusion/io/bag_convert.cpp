@@ -3,13 +3,13 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <sstream>
 
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/file_bytes.h"
 #include "flowfusion/core/output_folder.h"
 #include "flowfusion/io/bag_reader.h"
 
@@ -65,11 +65,9 @@ std::optional<std::string> groundtruthText(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError("--groundtruth " + path + ": no such file");
   readTrajectory(path);  // refuses a file that is not a TUM trajectory
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in.is_open()) throw InputError("--groundtruth " + path + ": cannot read it");
-  return text.str();
+  std::optional<std::string> text = readFileBytes(path);
+  if (!text) throw InputError("--groundtruth " + path + ": cannot read it");
+  return text;
 }
 
 // One frame's two images, their folders made on the first.

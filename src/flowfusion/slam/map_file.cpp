@@ -4,13 +4,12 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/file_bytes.h"
 #include "flowfusion/core/output_folder.h"
 
 namespace ff {
@@ -182,11 +181,11 @@ SavedKeyframe readKeyframe(Reader& in, const SavedMap& map) {
 }
 
 std::string readAll(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": no map file there (--map-in)");
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(path + ": cannot read the map file");
-  return bytes;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no map file there (--map-in)");
+  std::optional<std::string> bytes = readFileBytes(path);
+  if (!bytes) throw InputError(path + ": cannot read the map file");
+  return std::move(*bytes);
 }
 
 }  // namespace
