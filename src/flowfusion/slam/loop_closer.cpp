@@ -135,7 +135,7 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   const int from = id == loaded_ ? localized_from : id - 1;
   if (id > 0 && from >= 0)
     edges_.push_back({from, id, poses[from].inverse() * poses[id], config_.odometry_sigma_m,
-                      config_.odometry_sigma_deg * kDeg, false});
+                      config_.odometry_sigma_deg * kDeg, config_.odometry_loss_scale});
   std::vector<uint8_t> codes = index_.encode(*images);
   // A saved map's keyframes are candidates however recent.
   const std::vector<PlaceMatch> matches = index_.query(codes, std::max(id - config_.min_keyframe_gap, loaded_ - 1),
@@ -148,7 +148,8 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
     spdlog::debug("loop {} -> {}: similarity {:.2f}, {} (inliers {:.2f})", id, m.keyframe_id, m.similarity,
                   c.accepted ? "accepted" : c.reason, c.inlier_fraction);
     if (!c.accepted) continue;
-    edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg, true});
+    edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg,
+                      config_.loop_loss_scale});
     ++result.loops;
     covered = covered || withinKeyframeSpacing(c.T_candidate_query);
   }
@@ -161,7 +162,6 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   }
   if (result.loops > 0) {
     PoseGraphOptions options;
-    options.robust_scale = config_.loop_loss_scale;
     options.fixed_nodes = loaded_;
     result.poses = optimizePoseGraph(poses, edges_, options);
   }
