@@ -56,6 +56,10 @@ class FernLoopCloser final : public SlamBackEnd {
     int keyframe;   // -1: before the first keyframe
     SE3 T_kf_cam;   // the reported pose relative to it (or the pose itself)
     SE3 T_world_cam;  // the reported pose: the trajectory, exactly, until a loop closes
+    // Once the next keyframe is made: the pose relative to it, and how far along the frames from
+    // one keyframe to the next this one lies (0: the keyframe before alone places it).
+    SE3 T_next_cam = SE3::Identity();
+    double along = 0;
   };
   struct Pending {
     int due_frame;
@@ -67,6 +71,8 @@ class FernLoopCloser final : public SlamBackEnd {
   bool withinKeyframeSpacing(const SE3& T_a_b) const;
   bool needsKeyframe(const SE3& T_world_cam) const;
   void addKeyframe(const TrackedFrameInfo& info);
+  // The frames since the latest keyframe, relative to the one made now at T_world_kf as well.
+  void closeSpan(const SE3& T_world_kf);
   // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
   // `localized_from`: the keyframe the run's pose was last found against (the first own
   // keyframe's odometry edge after a saved map's).
@@ -81,6 +87,7 @@ class FernLoopCloser final : public SlamBackEnd {
   // The tracking thread's: keyframe poses in the tracker's world frame, frames, map anchors.
   std::vector<SE3> poses_;
   std::vector<FrameRef> frames_;
+  size_t span_start_ = 0;     // the first frame of the latest keyframe's span
   std::vector<int> anchors_;  // keyframe per map integration
   int frame_index_ = 0;
   int closures_ = 0;
@@ -114,7 +121,20 @@ void FernLoopCloser::frameTracked(const TrackedFrameInfo& info) {
   if (info.fused) anchors_.push_back(ref);
 }
 
+void FernLoopCloser::closeSpan(const SE3& T_world_kf) {
+  const int latest = static_cast<int>(poses_.size()) - 1;
+  const double frames = static_cast<double>(frames_.size() - span_start_);  // the new keyframe's is next
+  for (size_t i = span_start_; latest >= 0 && i < frames_.size(); ++i) {
+    FrameRef& f = frames_[i];
+    if (f.keyframe != latest) continue;
+    f.T_next_cam = T_world_kf.inverse() * poses_[latest] * f.T_kf_cam;
+    f.along = static_cast<double>(i - span_start_) / frames;
+  }
+  span_start_ = frames_.size();
+}
+
 void FernLoopCloser::addKeyframe(const TrackedFrameInfo& info) {
+  closeSpan(info.T_world_cam);
   const int id = static_cast<int>(poses_.size());
   poses_.push_back(info.T_world_cam);
   auto images = makeKeyframeImages(*info.frame, camera_, info.scores, config_);
@@ -135,7 +155,7 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   const int from = id == loaded_ ? localized_from : id - 1;
   if (id > 0 && from >= 0)
     edges_.push_back({from, id, poses[from].inverse() * poses[id], config_.odometry_sigma_m,
-                      config_.odometry_sigma_deg * kDeg, false});
+                      config_.odometry_sigma_deg * kDeg, config_.odometry_loss_scale});
   std::vector<uint8_t> codes = index_.encode(*images);
   // A saved map's keyframes are candidates however recent.
   const std::vector<PlaceMatch> matches = index_.query(codes, std::max(id - config_.min_keyframe_gap, loaded_ - 1),
@@ -148,7 +168,8 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
     spdlog::debug("loop {} -> {}: similarity {:.2f}, {} (inliers {:.2f})", id, m.keyframe_id, m.similarity,
                   c.accepted ? "accepted" : c.reason, c.inlier_fraction);
     if (!c.accepted) continue;
-    edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg, true});
+    edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg,
+                      config_.loop_loss_scale});
     ++result.loops;
     covered = covered || withinKeyframeSpacing(c.T_candidate_query);
   }
@@ -161,7 +182,6 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   }
   if (result.loops > 0) {
     PoseGraphOptions options;
-    options.robust_scale = config_.loop_loss_scale;
     options.fixed_nodes = loaded_;
     result.poses = optimizePoseGraph(poses, edges_, options);
   }
@@ -247,9 +267,17 @@ MapCorrection FernLoopCloser::apply(const CheckResult& r) {
 Trajectory FernLoopCloser::trajectory() const {
   Trajectory out;
   out.reserve(frames_.size());
-  for (const FrameRef& f : frames_)
-    out.push_back({f.timestamp, corrections_ == 0 || f.keyframe < 0 ? f.T_world_cam
-                                                                 : orthonormalized(poses_[f.keyframe] * f.T_kf_cam)});
+  for (const FrameRef& f : frames_) {
+    if (corrections_ == 0 || f.keyframe < 0) {
+      out.push_back({f.timestamp, f.T_world_cam});
+      continue;
+    }
+    // Between two keyframes the frame follows both, by how far along it lies: a jump tracked
+    // within the span is spread over it rather than carried whole by the frames after it.
+    const SE3 by_before = poses_[f.keyframe] * f.T_kf_cam;
+    const SE3 by_next = f.along > 0 ? poses_[f.keyframe + 1] * f.T_next_cam : by_before;
+    out.push_back({f.timestamp, orthonormalized(by_before * expSE3(f.along * logSE3(by_before.inverse() * by_next)))});
+  }
   return out;
 }
 

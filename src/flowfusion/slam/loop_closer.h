@@ -6,9 +6,11 @@
 // Reproducible whatever the thread timing: a keyframe's check starts from what the tracking
 // thread knew when the keyframe was made, and its result is applied slam.apply_after_frames frames
 // later (the tracking thread waits there only if the check is still running). A correction moves
-// every keyframe; frames keep their pose relative to the keyframe that was the latest when they
-// were tracked, and the map's surfels move with the keyframe that was the latest when they were
-// created (their map integration's anchor).
+// every keyframe; a frame keeps its pose relative to the keyframe that was the latest when it was
+// tracked and to the next one, and moves with both by how far along it lies between them (a jump
+// tracked between two keyframes is spread over their frames, docs/tuning.md#robust-odometry-edges);
+// the map's surfels move with the keyframe that was the latest when they were created (their map
+// integration's anchor).
 #include <memory>
 #include <optional>
 #include <string>
@@ -53,8 +55,8 @@ class SlamBackEnd {
   virtual std::optional<SE3> relocalize(const RgbdFrame& frame, const cv::Mat& scores) = 0;
   // Makes every check still running due, so takeCorrection() returns the rest (the run's end).
   virtual void finish() = 0;
-  // The trajectory after the last applied correction: each frame's reported pose moved with its
-  // keyframe (as tracked until a loop closes).
+  // The trajectory after the last applied correction: each frame's reported pose moved with the
+  // keyframes before and after it (as tracked until a loop closes).
   virtual Trajectory trajectory() const = 0;
   // Before the first frame: the keyframes of a saved map (slam/map_file.h, `run --map-in`), indexed
   // for relocalize() and the loop checks and held fixed in the pose graph: they are the world frame

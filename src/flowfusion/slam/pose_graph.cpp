@@ -57,7 +57,7 @@ std::vector<SE3> optimizePoseGraph(const std::vector<SE3>& initial, const std::v
     auto* cost = new ceres::AutoDiffCostFunction<EdgeError, 6, 3, 4, 3, 4>(
         new EdgeError{e.T_from_to.translation(), Eigen::Quaterniond(e.T_from_to.linear()).normalized(),
                       1.0 / e.sigma_m, 1.0 / e.sigma_rad});
-    ceres::LossFunction* loss = e.robust ? new ceres::CauchyLoss(options.robust_scale) : nullptr;
+    ceres::LossFunction* loss = e.robust_scale > 0 ? new ceres::CauchyLoss(e.robust_scale) : nullptr;
     problem.AddResidualBlock(cost, loss, t[e.from].data(), q[e.from].coeffs().data(), t[e.to].data(),
                              q[e.to].coeffs().data());
   }

@@ -3,8 +3,9 @@
 // poses T_world_node, an edge measures T_from_to and contributes the whitened error
 //   e = [ (t / sigma_m) ; (2 vec(q) / sigma_rad) ]  of  T_from_to^-1 * T_world_from^-1 * T_world_to,
 // (q its rotation as a unit quaternion, t its translation), the 3D pose graph of Ceres' examples.
-// Robust edges (loops, which may be wrong) go through a Cauchy loss of scale robust_scale; node 0
-// is held fixed (the world frame of the first keyframe), or the first PoseGraphOptions::fixed_nodes.
+// An edge may go through a Cauchy loss (its robust_scale, in standard deviations): loops, which
+// may be wrong, and odometry, which jumps where the tracking went wrong. Node 0 is held fixed (the
+// world frame of the first keyframe), or the first PoseGraphOptions::fixed_nodes.
 #include <vector>
 
 #include "flowfusion/core/se3.h"
@@ -16,11 +17,10 @@ struct PoseGraphEdge {
   SE3 T_from_to = SE3::Identity();
   double sigma_m = 0.01;    // standard deviation of the translation, metres
   double sigma_rad = 0.01;  // of the rotation, radians
-  bool robust = false;      // through the Cauchy loss
+  double robust_scale = 0;  // Cauchy loss scale in standard deviations; 0: none (quadratic)
 };
 
 struct PoseGraphOptions {
-  double robust_scale = 2.0;  // Cauchy scale, in standard deviations
   int max_iterations = 100;
   // Nodes 0 .. fixed_nodes - 1 are held where they are (at least node 0): the world frame, and a
   // reused map's keyframes (slam/map_file.h), which this run continues in.

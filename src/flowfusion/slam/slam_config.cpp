@@ -30,6 +30,8 @@ void validate(const SlamConfig& c, int odometry_levels) {
     throw InputError("slam.odometry_sigma_m and slam.loop_sigma_m must be > 0 (metres)");
   if (!positive(c.odometry_sigma_deg) || !positive(c.loop_sigma_deg))
     throw InputError("slam.odometry_sigma_deg and slam.loop_sigma_deg must be > 0 (degrees)");
+  if (!(c.odometry_loss_scale >= 0))
+    throw InputError("slam.odometry_loss_scale must be >= 0 (standard deviations; 0: no robust loss)");
   if (!positive(c.loop_loss_scale)) throw InputError("slam.loop_loss_scale must be > 0 (standard deviations)");
   if (c.apply_after_frames < 1 || c.apply_after_frames > 1000)
     throw InputError("slam.apply_after_frames must be 1 to 1000");

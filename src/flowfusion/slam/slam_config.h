@@ -2,7 +2,7 @@
 // The `slam` section: loop closure over keyframes (slam/loop_closer.h). Keyframes are kept as the
 // camera moves, a place index of randomized ferns proposes old keyframes that look like a new one,
 // the dense odometry checks each proposal geometrically, and a pose graph over the keyframes
-// (odometry and loop edges, a robust loss on the loops) is solved with Ceres on a background
+// (odometry and loop edges, each through a robust loss) is solved with Ceres on a background
 // thread. docs/tuning.md#loop_closure holds the measurements behind the defaults.
 #include <nlohmann/json.hpp>
 
@@ -51,9 +51,13 @@ struct SlamConfig {
   double min_correction_m = 0.01;
   double min_correction_deg = 0.5;
   // Pose graph: standard deviations of an odometry edge (between consecutive keyframes) and of a
-  // loop edge; loop edges go through a Cauchy loss of this scale (in standard deviations).
+  // loop edge, and the scales (in standard deviations) of the Cauchy losses they go through. The
+  // odometry's too: where the tracking jumps (people it took for the scene moved it 7-20 cm between
+  // two keyframes on the 320x240 loop), a quadratic edge keeps the jump and bends every lap around
+  // it instead (docs/tuning.md#robust-odometry-edges); 0: quadratic.
   double odometry_sigma_m = 0.01;
   double odometry_sigma_deg = 0.5;
+  double odometry_loss_scale = 2.0;
   double loop_sigma_m = 0.01;
   double loop_sigma_deg = 0.5;
   double loop_loss_scale = 2.0;
@@ -67,7 +71,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlamConfig, loop_closure, keyfra
                                                 min_similarity, candidates, min_keyframe_gap, min_inlier_fraction,
                                                 inlier_depth_m, inlier_intensity, max_correction_m,
                                                 max_correction_deg, min_correction_m, min_correction_deg, odometry_sigma_m, odometry_sigma_deg,
-                                                loop_sigma_m, loop_sigma_deg, loop_loss_scale, apply_after_frames)
+                                                odometry_loss_scale, loop_sigma_m, loop_sigma_deg, loop_loss_scale, apply_after_frames)
 
 // Throws InputError naming the setting when a value is out of range. `odometry_levels` bounds
 // keyframe_level.
