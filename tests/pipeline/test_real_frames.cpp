@@ -56,7 +56,7 @@ double meanOf(const std::vector<double>& v, int first, int last) {
 
 // Frames first..last of static fr1/rpy: on average at most `fixed` of the pixels marked with the
 // defaults, and more than `cause` with `undo` applied to them (the cause the default fixes) and
-// small marks inside the view kept (clearing them hides most of each cause).
+// small marks inside the view written (dropping them hides part of each cause).
 void expectFixedOnFr1Rpy(int first, int last, double fixed, double cause, void (*undo)(SystemConfig&),
                          const char* why) {
   const auto dir = testing::sharedTum("fr1_rpy_head150");

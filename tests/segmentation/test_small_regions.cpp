@@ -48,20 +48,5 @@ TEST(SmallRegions, ShareZeroKeepsEverythingAndBadInputIsRefused) {
   EXPECT_THROW(dropSmallInteriorRegions(empty, 0.02), InputError);
 }
 
-TEST(SmallRegions, TheScoresOfADroppedRegionBecomeZeroAndTheOthersStay) {
-  cv::Mat scores(50, 100, CV_32F, cv::Scalar(0.2f));
-  scores(cv::Rect(10, 10, 5, 5)).setTo(0.9f);   // small, inside: cleared
-  scores(cv::Rect(40, 10, 10, 10)).setTo(0.7f);  // 100 pixels: kept
-  scores(cv::Rect(0, 30, 3, 3)).setTo(0.8f);     // small, at the border: kept
-  clearSmallInteriorScores(scores, 0.5f, 0.02);
-  EXPECT_EQ(cv::countNonZero(scores(cv::Rect(10, 10, 5, 5))), 0);
-  EXPECT_FLOAT_EQ(scores.at<float>(15, 45), 0.7f);
-  EXPECT_FLOAT_EQ(scores.at<float>(31, 1), 0.8f);
-  EXPECT_FLOAT_EQ(scores.at<float>(40, 80), 0.2f);  // below the threshold: no region, untouched
-  EXPECT_EQ(cv::countNonZero(scores == 0.f), 25);
-  cv::Mat mask(50, 100, CV_8U, cv::Scalar(0));
-  EXPECT_THROW(clearSmallInteriorScores(mask, 0.5f, 0.02), InputError);
-}
-
 }  // namespace
 }  // namespace ff

@@ -131,9 +131,6 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     if (!result.tracking_ok && slam_) relocalize(frame, result, scores);
   }
 
-  // A small mark inside the view is static for the written mask, the map and the next frame alike.
-  if (!scores.empty())
-    clearSmallInteriorScores(scores, config_.pipeline.mask_threshold, config_.pipeline.mask_min_region);
   cv::Mat full_scores;
   if (!scores.empty()) cv::resize(scores, full_scores, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
@@ -147,9 +144,13 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);
-  // Only the written mask: pixels without depth are nothing the tracking or the map can use.
-  if (!full_scores.empty() && config_.pipeline.mask_hole_share > 0)
-    fillDepthHoles(result.dynamic_mask, frame.depth, config_.pipeline.mask_hole_share);
+  // Only the written mask: the tracking and the map have used the scores, and pixels without depth
+  // are nothing either can use.
+  if (!full_scores.empty()) {
+    dropSmallInteriorRegions(result.dynamic_mask, config_.pipeline.mask_min_region);
+    if (config_.pipeline.mask_hole_share > 0)
+      fillDepthHoles(result.dynamic_mask, frame.depth, config_.pipeline.mask_hole_share);
+  }
   trajectory_.push_back({frame.timestamp, atColourTime(frame, result.T_world_cam)});
   if (slam_) {
     StageTimer timer(timings_, "loop_closure");

@@ -46,7 +46,7 @@ struct PipelineOptions {
   // around it is (fillDepthHoles: a mover nearer than the sensor's range; 0: never).
   double mask_hole_share = 0.8;
   // Share of the image (0: keep all): a dynamic region smaller than it that touches no image border
-  // is static (clearSmallInteriorScores: a static cluster's own residual on real frames).
+  // is written as static (dropSmallInteriorRegions: a static cluster's own residual on real frames).
   double mask_min_region = 0.02;
   // The first odometry of a frame is weighted by the previous frame's scores carried over, so a
   // moving object seen before does not pull it (false: the paper's unweighted Eq. 1).

@@ -34,13 +34,4 @@ void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share) {
   }
 }
 
-void clearSmallInteriorScores(cv::Mat& scores, float threshold, double min_area_share) {
-  if (scores.empty() || scores.type() != CV_32FC1)
-    throw InputError("clearSmallInteriorScores: the scores must be a non-empty CV_32FC1 image");
-  const cv::Mat marked = scores > threshold;
-  cv::Mat kept = marked.clone();
-  dropSmallInteriorRegions(kept, min_area_share);
-  scores.setTo(0.f, marked != kept);
-}
-
 }  // namespace ff

@@ -1,6 +1,6 @@
 #pragma once
-// Dynamic scores without small marks inside the view. On real frames the scores leave marks of
-// one or two clusters where blur, a depth edge or the colour-depth time offset gives a
+// The written dynamic mask without small marks inside the view. On real frames the scores leave
+// marks of one or two clusters where blur, a depth edge or the colour-depth time offset gives a
 // static cluster a residual of its own, frame after frame, with nothing around it marked. A mover
 // within the depth sensor's range covers more of the image (a person at 6 m about 2 % of it), and
 // one entering the view is a slice of any size at first, but across the image's border.
@@ -12,10 +12,5 @@ namespace ff {
 // than `min_area_share` (in [0, 1); 0 keeps all) of the image's pixels and touches no image border.
 // Throws InputError on an empty mask, another type or a share outside [0, 1).
 void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share);
-
-// Sets to 0 the scores (CV_32FC1) of each region of pixels above `threshold` that
-// dropSmallInteriorRegions drops, so that the frame's mask, its fusion and the scores it hands on
-// agree. Throws InputError on an empty image, another type or a share outside [0, 1).
-void clearSmallInteriorScores(cv::Mat& scores, float threshold, double min_area_share);
 
 }  // namespace ff
