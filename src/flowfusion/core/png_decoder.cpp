@@ -1,7 +1,5 @@
 #include "flowfusion/core/png_decoder.h"
 
-#include "flowfusion/core/file_bytes.h"
-
 #ifdef FLOWFUSION_HAVE_LIBDEFLATE
 
 #include <libdeflate.h>
@@ -12,6 +10,8 @@
 #include <cstring>
 #include <memory>
 #include <string_view>
+
+#include "flowfusion/core/file_bytes.h"
 
 namespace ff {
 

@@ -7,9 +7,9 @@
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/segmentation/depth_holes.h"
-#include "flowfusion/segmentation/small_regions.h"
 #include "flowfusion/segmentation/dynamic_score.h"
 #include "flowfusion/segmentation/score_carry.h"
+#include "flowfusion/segmentation/small_regions.h"
 
 namespace ff {
 

@@ -69,6 +69,8 @@ class FernLoopCloser final : public SlamBackEnd {
   // Whether two poses lie within slam.keyframe_translation_m and _rotation_deg of each other: a new
   // keyframe is made beyond that, and a loop found within it covers the keyframe's view.
   bool withinKeyframeSpacing(const SE3& T_a_b) const;
+  // Waits for the checks still running: they add to the place index and the keyframe images.
+  void waitForChecks() const;
   bool needsKeyframe(const SE3& T_world_cam) const;
   void addKeyframe(const TrackedFrameInfo& info);
   // The frames since the latest keyframe, relative to the one made now at T_world_kf as well.
@@ -105,6 +107,10 @@ class FernLoopCloser final : public SlamBackEnd {
 bool FernLoopCloser::withinKeyframeSpacing(const SE3& T_a_b) const {
   return translationNorm(T_a_b) <= config_.keyframe_translation_m &&
          rotationAngleDeg(T_a_b) <= config_.keyframe_rotation_deg;
+}
+
+void FernLoopCloser::waitForChecks() const {
+  for (const Pending& p : pending_) p.result.wait();
 }
 
 bool FernLoopCloser::needsKeyframe(const SE3& T_world_cam) const {
@@ -189,7 +195,7 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
 }
 
 std::optional<SE3> FernLoopCloser::relocalize(const RgbdFrame& frame, const cv::Mat& scores) {
-  for (Pending& p : pending_) p.result.wait();  // the checks are done with the index and images
+  waitForChecks();
   const auto images = makeKeyframeImages(frame, camera_, scores, config_);
   const std::vector<PlaceMatch> matches =
       index_.query(index_.encode(*images), static_cast<int>(images_.size()) - 1, config_.candidates,
@@ -216,7 +222,7 @@ void FernLoopCloser::loadKeyframes(const std::vector<SavedKeyframe>& keyframes) 
 }
 
 std::vector<SavedKeyframe> FernLoopCloser::savedKeyframes() const {
-  for (const Pending& p : pending_) p.result.wait();  // images_ grows on the checks' thread
+  waitForChecks();
   std::vector<SavedKeyframe> out;
   out.reserve(poses_.size());
   for (size_t i = 0; i < poses_.size() && i < images_.size(); ++i)
@@ -225,7 +231,7 @@ std::vector<SavedKeyframe> FernLoopCloser::savedKeyframes() const {
 }
 
 int FernLoopCloser::keyframes() const {
-  for (const Pending& p : pending_) p.result.wait();  // images_ grows on the checks' thread
+  waitForChecks();
   return static_cast<int>(index_.size());
 }
 
