@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "flowfusion/core/error.h"
 #include "flowfusion/io/trajectory_io.h"
@@ -95,6 +96,63 @@ TEST(Augment, PeopleWalkInViewWithExactMasks) {
   config.people = 2;
   ff::synth::augmentSequence(in, out, config);
   EXPECT_GT(expectCompositedWithExactMasks(in, out, 6), 500) << "people walk in view of the first frames";
+}
+
+namespace {
+
+// Cuts a hole of half-size r px centred at `centre` into every depth image of a static sequence,
+// and sets the 2-px ring around it to ring_m metres (0: the ring keeps the real depth).
+void cutEnclosedHole(const std::string& dir, cv::Point centre, int r, double ring_m) {
+  for (const auto& entry : fs::directory_iterator(fs::path(dir) / "depth")) {
+    cv::Mat depth = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
+    const cv::Rect hole(centre.x - r, centre.y - r, 2 * r, 2 * r), ring(hole.x - 2, hole.y - 2, hole.width + 4, hole.height + 4);
+    if (ring_m > 0) depth(ring & cv::Rect(0, 0, depth.cols, depth.rows)).setTo(cv::Scalar(ring_m * 5000.0));
+    depth(hole & cv::Rect(0, 0, depth.cols, depth.rows)).setTo(cv::Scalar(0));
+    cv::imwrite(entry.path().string(), depth);
+  }
+}
+
+// Mask pixels of frame `index` of an augmented sequence inside `box`.
+int maskPixelsIn(const std::string& dir, size_t index, const cv::Rect& box) {
+  const auto seq = ff::TumSequence::open(dir);
+  const cv::Mat mask = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(seq.load(index).timestamp) + ".png")).string(),
+                                  cv::IMREAD_UNCHANGED);
+  return cv::countNonZero(mask(box));
+}
+
+}  // namespace
+
+// A hole in the real depth that nearer valid depth encloses (a black screen's speckles) hides the
+// objects behind that surface; a hole in a far wall shows them.
+TEST(Augment, AHoleEnclosedByNearerDepthHidesTheObjectsBehindIt) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  const std::string plain = (tmp.path() / "plain").string();
+  ff::synth::augmentSequence(in, plain, noiseless());
+  // The frame and place where the objects cover the most: the hole goes there.
+  const auto seq = ff::TumSequence::open(plain);
+  size_t best = 0;
+  cv::Mat best_mask;
+  for (size_t i = 0; i < seq.size(); ++i) {
+    const cv::Mat m = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(seq.load(i).timestamp) + ".png")).string(),
+                                 cv::IMREAD_UNCHANGED);
+    if (best_mask.empty() || cv::countNonZero(m) > cv::countNonZero(best_mask)) best = i, best_mask = m;
+  }
+  const cv::Moments mo = cv::moments(best_mask, true);
+  ASSERT_GT(mo.m00, 400) << "the objects cover a hole's worth of one frame";
+  const cv::Point centre(static_cast<int>(mo.m10 / mo.m00), static_cast<int>(mo.m01 / mo.m00));
+  const int r = 8;
+  const cv::Rect hole(centre.x - r, centre.y - r, 2 * r, 2 * r);
+  ASSERT_GT(maskPixelsIn(plain, best, hole), 50) << "the objects cover the hole's place";
+
+  const std::string in_wall = writeStatic(tmp.path() / "wall"), in_screen = writeStatic(tmp.path() / "screen");
+  cutEnclosedHole(in_wall, centre, r, 0);
+  cutEnclosedHole(in_screen, centre, r, 0.3);
+  const std::string out_wall = (tmp.path() / "aug_wall").string(), out_screen = (tmp.path() / "aug_screen").string();
+  ff::synth::augmentSequence(in_wall, out_wall, noiseless());
+  ff::synth::augmentSequence(in_screen, out_screen, noiseless());
+  EXPECT_GT(maskPixelsIn(out_wall, best, hole), 50) << "objects show through a hole in the wall behind them";
+  EXPECT_EQ(maskPixelsIn(out_screen, best, hole), 0) << "a screen 0.3 m away hides what lies behind its hole";
 }
 
 TEST(Augment, DropsFramesWithoutGroundTruthPose) {

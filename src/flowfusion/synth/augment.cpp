@@ -1,6 +1,7 @@
 // `flowfusion augment`: textured moving objects composited into a real static sequence.
 #include <algorithm>
 #include <filesystem>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 
 #include "flowfusion/core/config.h"
@@ -14,6 +15,9 @@ namespace ff::synth {
 namespace {
 
 constexpr uint64_t kAugmentStream = 0x41554730ULL, kAugmentNoise = 0x41554e30ULL, kAugmentPeople = 0x41555050ULL;
+// A hole in the real depth hides what lies behind the valid depth enclosing it within 1/10 of the
+// image width (64 px at VGA: the black monitor of TUM fr1's desk returns speckles that close).
+constexpr int kHoleReachFraction = 10;
 
 void validate(const AugmentConfig& c) {
   const auto bad = [](const std::string& what) { throw InputError("augment configuration: " + what); };
@@ -109,14 +113,55 @@ struct Composite {
   cv::Mat mask;  // CV_8U, 255 = a pasted (moving) pixel
 };
 
+// Along each row (transpose for columns): the nearest valid depth within reach_px before and after
+// every pixel, the farther of the two (0 where either side has none).
+cv::Mat boundedHoleDepthRows(const cv::Mat& depth, int reach_px) {
+  cv::Mat out(depth.size(), CV_32F, cv::Scalar(0));
+  std::vector<float> before(depth.cols);
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* z = depth.ptr<float>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0, last = -1; u < depth.cols; ++u) {
+      if (z[u] > 0) last = u;
+      before[u] = last >= 0 && u - last <= reach_px ? z[last] : 0.f;
+    }
+    for (int u = depth.cols - 1, next = -1; u >= 0; --u) {
+      if (z[u] > 0) next = u;
+      const float after = next >= 0 && next - u <= reach_px ? z[next] : 0.f;
+      o[u] = before[u] > 0 && after > 0 ? std::max(before[u], after) : 0.f;
+    }
+  }
+  return out;
+}
+
+// The depth in front of which a pasted object shows, per pixel: the real depth where the sensor
+// measured one; in a hole, the surface the hole lies within, when valid depth encloses it on both
+// sides of a row or of a column within reach_px (a black monitor's speckles: a person behind the
+// monitor stays hidden where its screen returned nothing); 0 (shows) in a hole open to one side,
+// such as the shadow beside a depth edge or the sensor's invalid band at the image border.
+cv::Mat occludingDepth(const cv::Mat& depth, int reach_px) {
+  const cv::Mat rows = boundedHoleDepthRows(depth, reach_px);
+  cv::Mat cols_t;
+  cv::transpose(boundedHoleDepthRows(depth.t(), reach_px), cols_t);
+  cv::Mat out = depth.clone();
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) {
+      if (depth.at<float>(v, u) > 0) continue;
+      const float a = rows.at<float>(v, u), b = cols_t.at<float>(v, u);
+      out.at<float>(v, u) = a > 0 && b > 0 ? std::min(a, b) : std::max(a, b);
+    }
+  return out;
+}
+
 Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt) {
   const cv::Mat obj_color = finishColor(layer.color, opt);
   const cv::Mat obj_depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
+  const cv::Mat z_front = occludingDepth(real.depth, std::max(1, real.depth.cols / kHoleReachFraction));
   Composite c{real.color.clone(), real.depth.clone(), cv::Mat(real.depth.rows, real.depth.cols, CV_8U, cv::Scalar(0))};
   for (int v = 0; v < c.mask.rows; ++v)
     for (int u = 0; u < c.mask.cols; ++u) {
       if (!layer.object_id.at<uint8_t>(v, u)) continue;
-      const float z_real = real.depth.at<float>(v, u);
+      const float z_real = z_front.at<float>(v, u);
       if (z_real > 0 && layer.depth_clean.at<float>(v, u) >= z_real) continue;
       c.mask.at<uint8_t>(v, u) = 255;
       c.color.at<cv::Vec3b>(v, u) = obj_color.at<cv::Vec3b>(v, u);

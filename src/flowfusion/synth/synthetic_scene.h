@@ -31,7 +31,7 @@
 namespace ff::synth {
 
 // Bumped whenever the same seed would produce different images; written to scene.json.
-inline constexpr int kGeneratorVersion = 1;
+inline constexpr int kGeneratorVersion = 2;
 
 // How the camera moves: a hand-held sweep (mostly yaw, as TUM fr1/xyz, fr3 walking_xyz) or fast
 // rotation about all three axes with little translation (as TUM fr1/rpy, fr3 walking_rpy).
