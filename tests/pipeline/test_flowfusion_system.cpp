@@ -182,6 +182,7 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
           "pipeline.tracking");
   rejects([](SystemConfig& c) { c.scores.theta_t = c.scores.theta_b; }, "scores.theta_t");
   rejects([](SystemConfig& c) { c.scores.alpha_M = -1; }, "scores.alpha_M");
+  rejects([](SystemConfig& c) { c.scores.group_depth_ratio = 1; }, "scores.group_depth_ratio");
   rejects([](SystemConfig& c) { c.scores.model_margin = -0.1; }, "scores.model_margin");
   rejects([](SystemConfig& c) { c.scores.model_agreement = 1.5; }, "scores.model_agreement");
   rejects([](SystemConfig& c) { c.scores.agreement_margin = 0; }, "scores.agreement_margin");

@@ -143,5 +143,24 @@ TEST(GroupMotion, AGroupMovesWithOneMovingClusterAndIsRememberedUnlessItIsTheBac
   EXPECT_FALSE(m.remembered[m.root[0]]);
 }
 
+TEST(GroupMotion, ClustersAtDifferentDepthsAreSeparateGroups) {
+  // A moving person 1.3 m away (cluster 0) touching a black screen's speckles 0.9 m away (cluster
+  // 1, dynamic without motion of its own) and a part of the person at 1.35 m (cluster 2).
+  const ClusterGraph g = clustersInARow({1, 1, 1, 10}, {1.3f, 0.9f, 1.35f, 2.f}, {{0, 1}, {0, 2}, {1, 3}});
+  ScoreConfig cfg;
+  const Eigen::VectorXd b = (Eigen::VectorXd(4) << 0.9, 0.8, 0.8, 0.1).finished();
+  const std::vector<double> delta = {0.25, 0.12, 0.12, 0.0}, flow = {0.2, 0.0, 0.0, 0.0};
+  const ClusterMeans memory = clusterMeans(g, cv::Mat(), "memory");
+  GroupMotion m = groupMotion(g, b, delta, flow, memory, false, cfg);
+  EXPECT_EQ(m.root[0], m.root[2]);  // 0.05 m at 1.3 m: within group_depth_ratio 0.3
+  EXPECT_NE(m.root[0], m.root[1]);  // 0.4 m in front of the person: beyond it
+  EXPECT_TRUE(m.moves[m.root[0]]);
+  EXPECT_FALSE(m.moves[m.root[1]]);
+  cfg.group_depth_ratio = 0;  // any depths: one group, moving with the person
+  m = groupMotion(g, b, delta, flow, memory, false, cfg);
+  EXPECT_EQ(m.root[0], m.root[1]);
+  EXPECT_TRUE(m.moves[m.root[1]]);
+}
+
 }  // namespace
 }  // namespace ff

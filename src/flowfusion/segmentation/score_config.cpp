@@ -27,6 +27,7 @@ void validate(const ScoreConfig& c) {
   if (!(c.body_smoothing >= 0 && std::isfinite(c.body_smoothing)))
     throw InputError("scores.body_smoothing must be a finite value >= 0 (1 = the paper's uniform lambda_G)");
   if (!(c.body_depth_ratio >= 0 && c.body_depth_ratio < 1)) throw InputError("scores.body_depth_ratio must be in [0, 1)");
+  if (!(c.group_depth_ratio >= 0 && c.group_depth_ratio < 1)) throw InputError("scores.group_depth_ratio must be in [0, 1)");
   if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
     throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
   if (!(c.target_mover_share >= 0 && c.target_mover_share <= 1))

@@ -32,6 +32,11 @@ struct ScoreConfig {
   // background it stands in front of (docs/tuning.md#body_smoothing).
   double body_smoothing = 2.0;
   double body_depth_ratio = 0.1;  // fraction of the depth
+  // Fraction of the depth (our extension; 0 = any): dynamic clusters that touch form one group for
+  // model_needs_motion and the motion memory only when their mean depths differ by at most this of
+  // the nearer. A person seen above a black screen 0.4 m in front of them must not lend the screen's
+  // speckles their motion (docs/tuning.md#group_depth_ratio).
+  double group_depth_ratio = 0.3;
   // Weight of the static-model occlusion term added to Eq. 10 (our extension; 0 = the paper): how
   // far the cluster lies in front of the static map, metres over D_i (docs/tuning.md#alpha_m).
   // It flags a whole object in front of the mapped background, not only its moving edges.
@@ -96,7 +101,7 @@ struct ScoreConfig {
   double flow_error_px = 2.0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
-                                                body_smoothing, body_depth_ratio, alpha_M, model_margin,
+                                                body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,

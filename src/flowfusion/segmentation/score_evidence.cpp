@@ -33,17 +33,25 @@ double inverseDepth(const ClusterGraph& graph, int c) {
   return D > 0 ? 1.0 / D : 0.0;
 }
 
-// Union-find over the adjacency graph joining clusters that both score above kDynamicScore: each
-// cluster's group root (a cluster not dynamic is its own root).
-std::vector<int> dynamicGroups(const std::vector<std::pair<int, int>>& edges, const Eigen::VectorXd& b) {
+// Whether clusters i and j both have a mean depth and those differ by at most `ratio` of the nearer.
+bool withinDepthRatio(const ClusterGraph& graph, int i, int j, double ratio) {
+  const double Di = graph.mean_depth[i], Dj = graph.mean_depth[j];
+  return Di > 0 && Dj > 0 && std::abs(Di - Dj) <= ratio * std::min(Di, Dj);
+}
+
+// Union-find over the adjacency graph joining clusters that both score above kDynamicScore and lie
+// within depth_ratio of each other's depth (0: at any depths): each cluster's group root (a cluster
+// not dynamic is its own root).
+std::vector<int> dynamicGroups(const ClusterGraph& graph, const Eigen::VectorXd& b, double depth_ratio) {
   std::vector<int> parent(b.size());
   for (size_t c = 0; c < parent.size(); ++c) parent[c] = static_cast<int>(c);
   const auto find = [&](int c) {
     while (parent[c] != c) c = parent[c] = parent[parent[c]];
     return c;
   };
-  for (const auto& [i, j] : edges)
-    if (b[i] > kDynamicScore && b[j] > kDynamicScore) parent[find(i)] = find(j);
+  for (const auto& [i, j] : graph.edges)
+    if (b[i] > kDynamicScore && b[j] > kDynamicScore && (depth_ratio == 0 || withinDepthRatio(graph, i, j, depth_ratio)))
+      parent[find(i)] = find(j);
   for (size_t c = 0; c < parent.size(); ++c) parent[c] = find(static_cast<int>(c));
   return parent;
 }
@@ -150,9 +158,7 @@ std::vector<double> bodyEdgeScales(const ClusterGraph& graph, const ScoreConfig&
   for (size_t e = 0; e < graph.edges.size(); ++e) {
     const auto [i, j] = graph.edges[e];
     if (i < 0 || j < 0 || i >= graph.num_clusters || j >= graph.num_clusters) continue;  // the solver rejects it
-    const double Di = graph.mean_depth[i], Dj = graph.mean_depth[j];
-    if (Di > 0 && Dj > 0 && std::abs(Di - Dj) <= config.body_depth_ratio * std::min(Di, Dj))
-      scale[e] = config.body_smoothing;
+    if (withinDepthRatio(graph, i, j, config.body_depth_ratio)) scale[e] = config.body_smoothing;
   }
   return scale;
 }
@@ -161,7 +167,7 @@ GroupMotion groupMotion(const ClusterGraph& graph, const Eigen::VectorXd& b, con
                         const std::vector<double>& flow, const ClusterMeans& memory, bool r_D_from_map,
                         const ScoreConfig& config) {
   const int n = graph.num_clusters;
-  GroupMotion g{dynamicGroups(graph.edges, b), std::vector<char>(n, 0), std::vector<char>(n, 0),
+  GroupMotion g{dynamicGroups(graph, b, config.group_depth_ratio), std::vector<char>(n, 0), std::vector<char>(n, 0),
                 std::vector<char>(n, 0)};
   std::vector<char> flow_moves(n, 0);
   std::vector<double> group_pixels(n, 0.0);
