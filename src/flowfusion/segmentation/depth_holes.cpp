@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/segmentation/region_labels.h"
 
 namespace ff {
 
@@ -51,13 +52,7 @@ void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_shar
     fill[r] = neighbours[r] > 0 && dynamic[r] >= min_dynamic_share * neighbours[r];
     any = any || fill[r];
   }
-  if (!any) return;
-  for (int v = 0; v < H; ++v) {
-    const int* l = regions.ptr<int>(v);
-    uchar* m = mask.ptr<uchar>(v);
-    for (int u = 0; u < W; ++u)
-      if (fill[l[u]]) m[u] = 255;
-  }
+  if (any) setChosenRegions(mask, regions, fill, 255);
 }
 
 }  // namespace ff

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/segmentation/region_labels.h"
 
 namespace ff {
 
@@ -25,13 +26,7 @@ void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share) {
     drop[r] = !on_border && stats.at<int>(r, cv::CC_STAT_AREA) < min_area;
     any = any || drop[r];
   }
-  if (!any) return;
-  for (int v = 0; v < mask.rows; ++v) {
-    const int* l = regions.ptr<int>(v);
-    uchar* m = mask.ptr<uchar>(v);
-    for (int u = 0; u < mask.cols; ++u)
-      if (drop[l[u]]) m[u] = 0;
-  }
+  if (any) setChosenRegions(mask, regions, drop, 0);
 }
 
 }  // namespace ff
