@@ -1,7 +1,8 @@
 // Loop closure in the system: a camera turning on the spot in a synthetic room comes back to its
 // first view; the loop is found, the trajectory after the closure stays on the truth, and two runs
 // give the same poses whatever the background thread's timing. Covered for a third of a second on
-// its second round, the camera is lost, and found again against the keyframes once it sees. The
+// its second round, the camera is lost, and found again against the keyframes once it sees; the
+// lost frames are bridged in the trajectory after the closure, the live ones say what was tracked. The
 // second round's keyframes, in views the first round's cover, keep only their pose-graph nodes.
 // Handed poses that slide aside on the second round, the back end pulls them back toward the truth,
 // the frames tracked during the slide included.
@@ -36,7 +37,7 @@ class LoopClosureSystemTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { scene_.reset(); }
 
-  static SE3 truth(int i) {
+  static SE3 truth(double i) {
     SE3 T = scene_->cameraPose(0);
     T.linear() = Eigen::AngleAxisd(i * kStepDeg * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix() * T.linear();
     return T;
@@ -78,6 +79,34 @@ class LoopClosureSystemTest : public ::testing::Test {
   static const Run& fernsRun() {
     static const Run r = run(LoopClosureMode::Ferns);
     return r;
+  }
+
+  // Covered from 330 to 360 degrees; it sees again at 420 degrees (the first round saw it): carried
+  // 60 degrees further than the constant motion would have taken it. Made once for the tests that read it.
+  static constexpr int kCoverFrom = 110, kCoverTo = 120, kJump = 20;
+  struct CoveredRun {
+    Run run;
+    std::vector<FrameResult> results;
+  };
+  static const CoveredRun& coveredRun() {
+    static const CoveredRun r = [] {
+      CoveredRun c;
+      c.run = run(LoopClosureMode::Ferns, kFrames, kCoverFrom, kCoverTo, kJump, &c.results);
+      return c;
+    }();
+    return r;
+  }
+  // Where the covered run's camera was at frame i: carried on evenly while covered, from the last
+  // view before the cover (frame 109, 327 degrees) to the first after it (frame 120, 420 degrees).
+  static SE3 coveredTruth(int i) {
+    if (i < kCoverFrom) return truth(i);
+    if (i >= kCoverTo) return truth(i + kJump);
+    return truth(i + kJump * (i - kCoverFrom + 1.0) / (kCoverTo - kCoverFrom + 1));
+  }
+  static int firstTrackedAfterCover(const std::vector<FrameResult>& results) {
+    for (int i = kCoverTo; i < static_cast<int>(results.size()); ++i)
+      if (results[i].tracking_ok) return i;
+    return -1;
   }
 
   static inline std::unique_ptr<synth::SyntheticScene> scene_;
@@ -159,23 +188,52 @@ TEST_F(LoopClosureSystemTest, CoveredKeyframesKeepOnlyTheirNodes) {
 
 TEST_F(LoopClosureSystemTest, RelocalizesAfterTheViewWasCovered) {
   if (!loopClosureAvailable()) GTEST_SKIP() << "built without Ceres (libceres-dev): no relocalization";
-  // Covered from 330 to 360 degrees; it sees again at 420 degrees (the first round saw it): carried
-  // 60 degrees further than the constant motion would have taken it.
-  constexpr int kCoverFrom = 110, kCoverTo = 120, kJump = 20;
-  std::vector<FrameResult> results;
-  const Run a = run(LoopClosureMode::Ferns, kFrames, kCoverFrom, kCoverTo, kJump, &results);
-  int found = -1;
-  for (int i = kCoverTo; i < kFrames && found < 0; ++i)
-    if (results[i].tracking_ok) found = i;
+  const auto& [a, results] = coveredRun();
+  const int found = firstTrackedAfterCover(results);
   ASSERT_GE(found, 0) << "never relocalized";
   double worst = 0;
   for (int i = found; i < kFrames; ++i)
-    worst = std::max(worst, translationNorm(a.tracked[i].T_world_cam.inverse() * truth(i + kJump)));
+    worst = std::max(worst, translationNorm(a.tracked[i].T_world_cam.inverse() * coveredTruth(i)));
   std::printf("[ measured ] tracking ok again %d frames after the view returned (%s); largest error after: %.4f m\n",
               found - kCoverTo, results[found].message.c_str(), worst);
   EXPECT_LE(found - kCoverTo, 30);  // within 1 s at 30 Hz
   EXPECT_LT(worst, 0.05);
   for (int i = kCoverFrom; i < kCoverTo; ++i) EXPECT_FALSE(results[i].tracking_ok) << "frame " << i;
+}
+
+// Once found again, the frames lost while covered lie in the trajectory after the closure between the
+// last frame tracked before the cover and the first after it (interpolated on SE(3)): the truth, since
+// the camera turned evenly meanwhile, and no step between two frames beyond the carried motion's
+// (8.5 degrees a frame while covered; as tracked, the return jumps 63 degrees). Their live poses stay
+// the constant-velocity guess. Measured: 10.6 mm and 0.41 degrees at most off the truth (bridged
+// across 93 degrees), steps at most 5.7 mm and 8.43 degrees (as tracked 62.6 degrees).
+TEST_F(LoopClosureSystemTest, BridgesTheLostFramesOnceTrackingIsRegained) {
+  if (!loopClosureAvailable()) GTEST_SKIP() << "built without Ceres (libceres-dev): no relocalization";
+  const auto& [a, results] = coveredRun();
+  const int found = firstTrackedAfterCover(results);
+  ASSERT_GE(found, 0) << "never relocalized";
+  double worst_m = 0, worst_deg = 0, step_m = 0, step_deg = 0, tracked_step_deg = 0;
+  for (int i = kCoverFrom; i < found; ++i) {
+    const SE3 T_truth_closed = coveredTruth(i).inverse() * a.closed[i].T_world_cam;
+    worst_m = std::max(worst_m, translationNorm(T_truth_closed));
+    worst_deg = std::max(worst_deg, rotationAngleDeg(T_truth_closed));
+  }
+  for (int i = 1; i < kFrames; ++i) {
+    const SE3 T_prev_cur = a.closed[i - 1].T_world_cam.inverse() * a.closed[i].T_world_cam;
+    step_m = std::max(step_m, translationNorm(T_prev_cur));
+    step_deg = std::max(step_deg, rotationAngleDeg(T_prev_cur));
+    tracked_step_deg = std::max(
+        tracked_step_deg, rotationAngleDeg(a.tracked[i - 1].T_world_cam.inverse() * a.tracked[i].T_world_cam));
+  }
+  std::printf("[ measured ] lost frames %d-%d bridged: largest error %.4f m, %.2f deg; largest step between frames "
+              "%.4f m, %.2f deg (as tracked %.2f deg)\n", kCoverFrom, found - 1, worst_m, worst_deg, step_m, step_deg,
+              tracked_step_deg);
+  EXPECT_LT(worst_m, 0.02);
+  EXPECT_LT(worst_deg, 1.0);
+  EXPECT_LT(step_m, 0.01);
+  EXPECT_LT(step_deg, 9.5);
+  for (int i = kCoverFrom; i < kCoverTo; ++i)
+    EXPECT_TRUE(a.tracked[i].T_world_cam.isApprox(results[i].T_world_cam, 1e-9)) << "frame " << i;
 }
 
 TEST_F(LoopClosureSystemTest, OffKeepsTheTrackedPoses) {

@@ -1,5 +1,6 @@
 #include "flowfusion/slam/loop_closer.h"
 
+#include <algorithm>
 #include <deque>
 #include <future>
 #include <spdlog/spdlog.h>
@@ -55,7 +56,7 @@ class FernLoopCloser final : public SlamBackEnd {
     double timestamp;
     int keyframe;   // -1: before the first keyframe
     SE3 T_kf_cam;   // the reported pose relative to it (or the pose itself)
-    SE3 T_world_cam;  // the reported pose: the trajectory, exactly, until a loop closes
+    SE3 T_world_cam;  // the reported pose (a lost frame's: bridged once tracked again), until a loop closes
     // Once the next keyframe is made: the pose relative to it, and how far along the frames from
     // one keyframe to the next this one lies (0: the keyframe before alone places it).
     SE3 T_next_cam = SE3::Identity();
@@ -75,6 +76,11 @@ class FernLoopCloser final : public SlamBackEnd {
   void addKeyframe(const TrackedFrameInfo& info);
   // The frames since the latest keyframe, relative to the one made now at T_world_kf as well.
   void closeSpan(const SE3& T_world_kf);
+  // Tracked again at T_world_back (the reported pose, at `timestamp`): the lost frames since
+  // lost_from_ take the poses interpolated on SE(3), by time, between the frame before them and it.
+  void bridgeLostSpan(double timestamp, const SE3& T_world_back);
+  // A frame's pose after the last applied correction (the trajectory's).
+  SE3 correctedPose(const FrameRef& f) const;
   // On the background thread, after the previous keyframe's check: the loops of keyframe `id`.
   // `localized_from`: the keyframe the run's pose was last found against (the first own
   // keyframe's odometry edge after a saved map's).
@@ -90,6 +96,7 @@ class FernLoopCloser final : public SlamBackEnd {
   std::vector<SE3> poses_;
   std::vector<FrameRef> frames_;
   size_t span_start_ = 0;     // the first frame of the latest keyframe's span
+  std::optional<size_t> lost_from_;  // the first frame of the lost span the tracking is in
   std::vector<int> anchors_;  // keyframe per map integration
   int frame_index_ = 0;
   int closures_ = 0;
@@ -119,6 +126,9 @@ bool FernLoopCloser::needsKeyframe(const SE3& T_world_cam) const {
 
 void FernLoopCloser::frameTracked(const TrackedFrameInfo& info) {
   ++frame_index_;
+  if (!info.tracking_ok && !lost_from_) lost_from_ = frames_.size();
+  // Before a keyframe made now closes the span the lost frames lie in.
+  if (info.tracking_ok && lost_from_) bridgeLostSpan(info.frame->timestamp, info.T_world_cam_reported);
   if (info.tracking_ok && needsKeyframe(info.T_world_cam)) addKeyframe(info);
   const int ref = static_cast<int>(poses_.size()) - 1;
   frames_.push_back({info.frame->timestamp, ref,
@@ -137,6 +147,23 @@ void FernLoopCloser::closeSpan(const SE3& T_world_kf) {
     f.along = static_cast<double>(i - span_start_) / frames;
   }
   span_start_ = frames_.size();
+}
+
+void FernLoopCloser::bridgeLostSpan(double timestamp, const SE3& T_world_back) {
+  const size_t from = *lost_from_;
+  lost_from_.reset();
+  if (from == 0) return;  // lost from the first frame handed over: nothing to start from
+  // No keyframe is made while lost: the frame before and the lost ones lie in the latest one's span.
+  const FrameRef& before = frames_[from - 1];
+  const SE3 T_world_before = correctedPose(before);
+  const Vector6d step = logSE3(T_world_before.inverse() * T_world_back);
+  const double dt_s = timestamp - before.timestamp;
+  for (size_t i = from; i < frames_.size(); ++i) {
+    FrameRef& f = frames_[i];
+    const double along = dt_s > 0 ? std::clamp((f.timestamp - before.timestamp) / dt_s, 0.0, 1.0) : 0.0;
+    f.T_world_cam = orthonormalized(T_world_before * expSE3(along * step));
+    f.T_kf_cam = f.keyframe < 0 ? f.T_world_cam : poses_[f.keyframe].inverse() * f.T_world_cam;
+  }
 }
 
 void FernLoopCloser::addKeyframe(const TrackedFrameInfo& info) {
@@ -270,20 +297,19 @@ MapCorrection FernLoopCloser::apply(const CheckResult& r) {
   return c;
 }
 
+SE3 FernLoopCloser::correctedPose(const FrameRef& f) const {
+  if (corrections_ == 0 || f.keyframe < 0) return f.T_world_cam;
+  // Between two keyframes the frame follows both, by how far along it lies: a jump tracked
+  // within the span is spread over it rather than carried whole by the frames after it.
+  const SE3 by_before = poses_[f.keyframe] * f.T_kf_cam;
+  const SE3 by_next = f.along > 0 ? poses_[f.keyframe + 1] * f.T_next_cam : by_before;
+  return orthonormalized(by_before * expSE3(f.along * logSE3(by_before.inverse() * by_next)));
+}
+
 Trajectory FernLoopCloser::trajectory() const {
   Trajectory out;
   out.reserve(frames_.size());
-  for (const FrameRef& f : frames_) {
-    if (corrections_ == 0 || f.keyframe < 0) {
-      out.push_back({f.timestamp, f.T_world_cam});
-      continue;
-    }
-    // Between two keyframes the frame follows both, by how far along it lies: a jump tracked
-    // within the span is spread over it rather than carried whole by the frames after it.
-    const SE3 by_before = poses_[f.keyframe] * f.T_kf_cam;
-    const SE3 by_next = f.along > 0 ? poses_[f.keyframe + 1] * f.T_next_cam : by_before;
-    out.push_back({f.timestamp, orthonormalized(by_before * expSE3(f.along * logSE3(by_before.inverse() * by_next)))});
-  }
+  for (const FrameRef& f : frames_) out.push_back({f.timestamp, correctedPose(f)});
   return out;
 }
 

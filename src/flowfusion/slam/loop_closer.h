@@ -10,7 +10,10 @@
 // tracked and to the next one, and moves with both by how far along it lies between them (a jump
 // tracked between two keyframes is spread over their frames, docs/tuning.md#robust-odometry-edges);
 // the map's surfels move with the keyframe that was the latest when they were created (their map
-// integration's anchor).
+// integration's anchor). Frames whose tracking failed are bridged once it is regained (by the view
+// returning or by relocalize()): they take the poses interpolated on SE(3), by time, between the last
+// frame tracked before them and the first after, and move with their keyframe as tracked frames do
+// (the live FrameResult keeps what the tracker said; docs/tuning.md#relocalization).
 #include <memory>
 #include <optional>
 #include <string>
@@ -56,7 +59,7 @@ class SlamBackEnd {
   // Makes every check still running due, so takeCorrection() returns the rest (the run's end).
   virtual void finish() = 0;
   // The trajectory after the last applied correction: each frame's reported pose moved with the
-  // keyframes before and after it (as tracked until a loop closes).
+  // keyframes before and after it (as tracked until a loop closes, lost frames bridged).
   virtual Trajectory trajectory() const = 0;
   // Before the first frame: the keyframes of a saved map (slam/map_file.h, `run --map-in`), indexed
   // for relocalize() and the loop checks and held fixed in the pose graph: they are the world frame
