@@ -34,8 +34,8 @@ struct ScoreConfig {
   double body_depth_ratio = 0.1;  // fraction of the depth
   // Fraction of the depth (our extension; 0 = any): dynamic clusters that touch form one group for
   // model_needs_motion and the motion memory only when their mean depths differ by at most this of
-  // the nearer. A person seen above a black screen 0.4 m in front of them must not lend the screen's
-  // speckles their motion (docs/tuning.md#group_depth_ratio).
+  // the nearer: a black screen's speckles must not take the motion of a dynamic surface 0.3 m
+  // behind them (docs/tuning.md#group_depth_ratio).
   double group_depth_ratio = 0.3;
   // Weight of the static-model occlusion term added to Eq. 10 (our extension; 0 = the paper): how
   // far the cluster lies in front of the static map, metres over D_i (docs/tuning.md#alpha_m).
