@@ -38,6 +38,11 @@ ff::synth::AugmentConfig noiseless(int objects = 2) {
   return c;
 }
 
+// The truth mask an augmented sequence holds for the frame at `timestamp`.
+cv::Mat maskAt(const ff::TumSequence& seq, double timestamp) {
+  return cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(timestamp) + ".png")).string(), cv::IMREAD_UNCHANGED);
+}
+
 // The augmented sequence has the source's poses and timestamps; its mask marks exactly the pixels
 // where the inserted depth replaced the real one (in front of it or where it had none). Returns the
 // number of mask pixels.
@@ -57,8 +62,7 @@ int expectCompositedWithExactMasks(const std::string& in, const std::string& out
     EXPECT_TRUE(ff::interpolatePose(*src.groundtruth(), a.timestamp, Ta));
     EXPECT_TRUE(ff::interpolatePose(*dst.groundtruth(), b.timestamp, Tb));
     EXPECT_LT(ff::translationNorm(Ta.inverse() * Tb), 1e-4);
-    const cv::Mat mask =
-        cv::imread((fs::path(*dst.masksDir()) / (ff::timestampName(b.timestamp) + ".png")).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat mask = maskAt(dst, b.timestamp);
     EXPECT_EQ(mask.size(), a.depth.size());
     if (mask.size() != a.depth.size()) return 0;
     mask_total += cv::countNonZero(mask);
@@ -115,8 +119,7 @@ void cutEnclosedHole(const std::string& dir, cv::Point centre, int r, double rin
 // Mask pixels of frame `index` of an augmented sequence inside `box`.
 int maskPixelsIn(const std::string& dir, size_t index, const cv::Rect& box) {
   const auto seq = ff::TumSequence::open(dir);
-  const cv::Mat mask = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(seq.load(index).timestamp) + ".png")).string(),
-                                  cv::IMREAD_UNCHANGED);
+  const cv::Mat mask = maskAt(seq, seq.load(index).timestamp);
   return cv::countNonZero(mask(box));
 }
 
@@ -134,8 +137,7 @@ TEST(Augment, AHoleEnclosedByNearerDepthHidesTheObjectsBehindIt) {
   size_t best = 0;
   cv::Mat best_mask;
   for (size_t i = 0; i < seq.size(); ++i) {
-    const cv::Mat m = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(seq.load(i).timestamp) + ".png")).string(),
-                                 cv::IMREAD_UNCHANGED);
+    const cv::Mat m = maskAt(seq, seq.load(i).timestamp);
     if (best_mask.empty() || cv::countNonZero(m) > cv::countNonZero(best_mask)) best = i, best_mask = m;
   }
   const cv::Moments mo = cv::moments(best_mask, true);
@@ -216,8 +218,7 @@ TEST(Augment, RealFr1XyzFrames) {
   EXPECT_NEAR(seq.camera().fx, 517.3, 1e-6);
   ASSERT_TRUE(seq.masksDir());
   const auto f = seq.load(0);
-  const cv::Mat mask = cv::imread((fs::path(*seq.masksDir()) / (ff::timestampName(f.timestamp) + ".png")).string(),
-                                  cv::IMREAD_UNCHANGED);
+  const cv::Mat mask = maskAt(seq, f.timestamp);
   EXPECT_GT(cv::countNonZero(mask), 1000) << "objects at 0.7-2 m in front of the first camera";
   // The real depth keeps its own stamp (fr1/xyz: 3.6 ms or more after the colour's), which the
   // pipeline reads as the depth's time.
