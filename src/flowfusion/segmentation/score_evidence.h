@@ -77,10 +77,10 @@ std::vector<double> bodyEdgeScales(const ClusterGraph& graph, const ScoreConfig&
 // Which groups of dynamic clusters move: the groups are the graph's connected clusters scoring
 // above kDynamicScore, joined across edges within group_depth_ratio of depth. A group moves when
 // one of its clusters' delta exceeds model_motion_delta (with model_motion_cue = flow against a
-// map-built target: its flow term does, or the delta does in a remembered group). Motion memory (our extension, model_memory_s): a group is remembered
-// when one of its clusters was moving recently over most of its pixels (MotionMemory::recall),
-// unless it is the background (kBackgroundShare). Indexed by cluster; the group's decision at its
-// root.
+// map-built target: its flow term does, or the delta does in a remembered group). Motion memory
+// (our extension, model_memory_s): a group is remembered when one of its clusters was moving
+// recently over most of its pixels (MotionMemory::recall), unless it is the background
+// (kBackgroundShare). Indexed by cluster; the group's decision at its root.
 struct GroupMotion {
   std::vector<int> root;          // each cluster's group root (a cluster not dynamic is its own)
   std::vector<char> moves;        // at the root
