@@ -522,7 +522,7 @@ TEST(BagConvert, AnEarlyFailureLeavesNothingAndTheRerunWorks) {
   EXPECT_FALSE(fs::exists(out)) << "nothing to keep, nothing to block the rerun";
   // Ground truth and options are checked before the first frame: nothing is written.
   const std::string missing = (tmp.path() / "missing.txt").string();
-  for (const std::string more : {" --groundtruth " + missing, std::string(" --depth-scale 1e-30"),
+  for (const std::string& more : {" --groundtruth " + missing, std::string(" --depth-scale 1e-30"),
                                  std::string(" --depth-scale inf"), std::string(" --depth-scale nan")}) {
     const auto early = ff::testing::runShell(convertCommand(good, out.string(), more));
     EXPECT_EQ(early.status, 2) << more << ": " << early.output;

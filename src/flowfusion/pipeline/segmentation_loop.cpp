@@ -46,7 +46,8 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       refine_odometry_(refineConfig(config)),
       flow_(makeOpticalFlow(config.flow)),
       clusterer_(makeClusterer(config.clustering)),
-      memory_(config.scores.model_memory_s, seg_camera_) {}
+      memory_(config.scores.model_memory_s, seg_camera_),
+      past_views_(seg_camera_, config.scores.model_view_every_frames, config.scores.model_views) {}
 
 cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur,
                                          const SE3& T_prev_cur) const {
@@ -179,15 +180,25 @@ SegmentationLoop::MapEvidence SegmentationLoop::mapEvidence(const SegmentationIn
   return e;
 }
 
+cv::Mat SegmentationLoop::withheldWhereSeenStatic(const cv::Mat& r_M, const cv::Mat& depth, const SE3& T_world_cur,
+                                                  double timestamp, Timings& timings) const {
+  if (r_M.empty() || past_views_.empty()) return r_M;
+  StageTimer timer(timings, "scores");
+  const ScoreConfig& s = config_.scores;
+  return PastViews::withoutStaticThere(
+      r_M, past_views_.sight(depth, T_world_cur, timestamp, s.model_view_min_age_s, s.model_margin, r_M > 0));
+}
+
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
                                    MotionEstimate& estimate, Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
   const int level = opt.segmentation_level;
   const RgbdFrame seg_frame = segmentationFrame(in.frame, in.cur);
   ResidualImages res;
-  MapEvidence evidence = mapEvidence(in, in.target.T_world_target * estimate.T_target_cur, seg_frame, timings);
+  const SE3 T_world_cur = in.target.T_world_target * estimate.T_target_cur;
+  MapEvidence evidence = mapEvidence(in, T_world_cur, seg_frame, timings);
   res.r_D_from_map = in.target.from_model;
-  res.r_M = evidence.r_M;
+  res.r_M = withheldWhereSeenStatic(evidence.r_M, seg_frame.depth, T_world_cur, in.frame.timestamp, timings);
   res.a_M = evidence.a_M;
   background_ = evidence.background;
   if (config_.scores.temporal_prior > 0 && !in.previous.scores.empty() && !estimate.restarted_from_flow) {
@@ -237,7 +248,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     estimate.T_target_cur = again.T_target_source;
     if (done) break;
   }
-  memory_.remember(graph, scores, seg_frame.depth, in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
+  const SE3 T_world_scored = in.target.T_world_target * estimate.T_target_cur;
+  memory_.remember(graph, scores, seg_frame.depth, T_world_scored, in.frame.timestamp);
+  past_views_.add(seg_frame.depth, estimate.scores, T_world_scored, in.frame.timestamp);
 }
 
 }  // namespace ff

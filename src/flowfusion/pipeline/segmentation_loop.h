@@ -18,6 +18,7 @@
 #include "flowfusion/pipeline/tracking_target.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/motion_memory.h"
+#include "flowfusion/segmentation/past_views.h"
 
 namespace ff {
 
@@ -84,6 +85,9 @@ class SegmentationLoop {
   };
   MapEvidence mapEvidence(const SegmentationInput& in, const SE3& T_world_cur, const RgbdFrame& seg_frame,
                           Timings& timings) const;
+  // r_M without the pixels whose point an earlier scored frame saw as a static surface (past_views_).
+  cv::Mat withheldWhereSeenStatic(const cv::Mat& r_M, const cv::Mat& depth, const SE3& T_world_cur, double timestamp,
+                                  Timings& timings) const;
   void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
                    MotionEstimate& estimate, Timings& timings);
   // The current frame's intensity and depth at the segmentation level.
@@ -98,6 +102,7 @@ class SegmentationLoop {
   std::unique_ptr<Clusterer> clusterer_;
   cv::Mat background_;  // the static map's depth rendered for the last scored frame (mapEvidence)
   MotionMemory memory_;  // where objects moved, for the scores' model term (scores.model_memory_s)
+  PastViews past_views_;  // what earlier frames saw, for the same term (scores.model_views)
 };
 
 }  // namespace ff

@@ -30,6 +30,12 @@ void validate(const ScoreConfig& c) {
   if (!(c.group_depth_ratio >= 0 && c.group_depth_ratio < 1)) throw InputError("scores.group_depth_ratio must be in [0, 1)");
   if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
     throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
+  if (!(c.model_views >= 0 && c.model_views <= 1000))
+    throw InputError("scores.model_views must be in [0, 1000] frames (0 turns the past views off)");
+  if (!(c.model_view_every_frames >= 1 && c.model_view_every_frames <= 1000))
+    throw InputError("scores.model_view_every_frames must be in [1, 1000] frames");
+  if (!(c.model_view_min_age_s >= 0 && std::isfinite(c.model_view_min_age_s)))
+    throw InputError("scores.model_view_min_age_s must be a finite number of seconds >= 0");
   if (!(c.target_mover_share >= 0 && c.target_mover_share <= 1))
     throw InputError("scores.target_mover_share must be in [0, 1] (0 turns the rule off)");
   if (!(c.target_mover_margin_px >= 0 && c.target_mover_margin_px <= 16))

@@ -73,6 +73,15 @@ struct ScoreConfig {
   // a row is remembered, so a static surface flagged once is not, one flagged longer is released
   // after this time (MotionMemory, docs/tuning.md#model_memory_s).
   double model_memory_s = 2.0;
+  // Past views (our extension; 0 = off): the model term is withheld at a pixel where one of the
+  // last model_views scored frames (one of every model_view_every_frames) at least
+  // model_view_min_age_s old saw a static surface at its point and none saw through it: a surface
+  // come back into view, or uncovered by parallax, in front of surfels fused from other viewpoints
+  // (PastViews, docs/tuning.md#model_views). The age keeps out the recent frames that missed a
+  // mover still standing where they saw it. 60 of every 5th frame: 10 s at 30 Hz, 23 MB at 320x240.
+  int model_views = 60;
+  int model_view_every_frames = 5;
+  double model_view_min_age_s = 2.0;
   // Fraction (our extension; 0 = off): a cluster with at least this share of its pixels landing on
   // the target's own movers (residuals.on_target_mover) was compared with nothing there, and a
   // small flow residual alone (the inside of a slow or turning mover) is no evidence that it
@@ -104,6 +113,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
+                                                model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
                                                 flow_error_px)
 // Throws InputError naming the first bad setting.
