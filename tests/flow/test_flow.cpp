@@ -176,5 +176,57 @@ TEST(RelativeToFrameError, ScalesOnlyAFrameWhoseMedianErrorExceedsTheTypical) {
   EXPECT_TRUE(std::isnan(finiteMedian(cv::Mat(2, 2, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN())))));
 }
 
+TEST(HiddenIn, MarksThePointsTheOtherViewSawSomethingNearerAt) {
+  // A 32x24 camera before a wall 4 m away; in the other view, 0.5 m to the side, a box 2 m away
+  // stands over columns 10-13 (the world is the first view's camera frame).
+  const CameraIntrinsics camera{20, 20, 15.5, 11.5, 32, 24};
+  const cv::Mat wall(24, 32, CV_32F, cv::Scalar(4.f));
+  cv::Mat other = wall.clone();
+  other.colRange(10, 14).setTo(2.f);
+  SE3 T_other_first = SE3::Identity();
+  T_other_first.translation() = Eigen::Vector3d(-0.5, 0, 0);  // the other camera 0.5 m along +x
+  const cv::Mat hidden = hiddenIn(wall, other, camera, T_other_first, 0.03);
+  // Wall pixel u lands at u - 20 * 0.5 / 4 = u - 2.5 px in the other view, rounded to u - 2: the
+  // 3x3 pixels there (u - 3 to u - 1) meet the box's columns for u in 11-16.
+  for (int u = 0; u < 32; ++u) {
+    const bool behind_box = u >= 11 && u <= 16;
+    EXPECT_EQ(hidden.at<uint8_t>(12, u) != 0, behind_box) << "column " << u;
+  }
+  // The same depth seen again, or a point nearer than what the other view saw, is not hidden.
+  EXPECT_EQ(cv::countNonZero(hiddenIn(wall, wall, camera, SE3::Identity(), 0.03)), 0);
+  EXPECT_EQ(cv::countNonZero(hiddenIn(cv::Mat(24, 32, CV_32F, cv::Scalar(1.f)), other, camera, SE3::Identity(), 0.03)), 0);
+  EXPECT_THROW(hiddenIn(wall, cv::Mat(10, 10, CV_32F, cv::Scalar(1.f)), camera, SE3::Identity(), 0.03), InputError);
+}
+
+TEST(LargerResidual, TakesTheLargerWhereBothAreKnownAndKeepsRfsGaps) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const cv::Mat r_F = (cv::Mat_<float>(1, 4) << 1.f, 5.f, nan, 2.f);
+  const cv::Mat other = (cv::Mat_<float>(1, 4) << 3.f, 4.f, 9.f, nan);
+  const cv::Mat out = largerResidual(r_F, other);
+  EXPECT_FLOAT_EQ(out.at<float>(0, 0), 3.f);
+  EXPECT_FLOAT_EQ(out.at<float>(0, 1), 5.f);
+  EXPECT_TRUE(std::isnan(out.at<float>(0, 2)));  // out of the previous frame's view stays no evidence
+  EXPECT_FLOAT_EQ(out.at<float>(0, 3), 2.f);
+  EXPECT_EQ(largerResidual(r_F, {}).data, r_F.data);  // no other residual: r_F as it is
+  EXPECT_THROW(largerResidual(r_F, cv::Mat(2, 4, CV_32F)), InputError);
+}
+
+TEST(ChainFlows, AddsEachStepWhereTheChainHasGotToAndLosesWhatLeavesTheImage) {
+  // Step 1 shifts every pixel 2 px right; step 2 shifts the left half of its image 1 px down and
+  // the right half 3 px up.
+  FlowField right{cv::Mat(8, 10, CV_32FC2, cv::Scalar(2.f, 0.f))};
+  FlowField split{cv::Mat(8, 10, CV_32FC2, cv::Scalar(0.f, 1.f))};
+  split.uv.colRange(5, 10).setTo(cv::Scalar(0.f, -3.f));
+  const FlowField chained = chainFlows({&right, &split});
+  const auto at = [&](int u, int v) { return chained.uv.at<cv::Vec2f>(v, u); };
+  EXPECT_EQ(at(1, 4), cv::Vec2f(2.f, 1.f));   // reaches column 3, in the left half
+  EXPECT_EQ(at(4, 4), cv::Vec2f(2.f, -3.f));  // reaches column 6, in the right half
+  EXPECT_TRUE(std::isnan(at(9, 4)[0]));        // reaches column 11, beyond the second image
+  EXPECT_EQ(cv::norm(chainFlows({&right}).uv, right.uv, cv::NORM_INF), 0.0);
+  EXPECT_THROW(chainFlows({}), InputError);
+  FlowField small{cv::Mat(4, 4, CV_32FC2, cv::Scalar(0.f, 0.f))};
+  EXPECT_THROW(chainFlows({&right, &small}), InputError);
+}
+
 }  // namespace
 }  // namespace ff

@@ -1,5 +1,6 @@
 #include "flowfusion/core/rgbd_frame.h"
 
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 
 namespace ff {
@@ -20,6 +21,16 @@ RgbdFrame makeRgbdFrame(double timestamp, const cv::Mat& bgr8, const cv::Mat& de
   depth16.convertTo(f.depth, CV_32F, 1.0 / depth_scale);
   f.name = name;
   return f;
+}
+
+float smallestDepthAround(const cv::Mat& depth, int u, int v) {
+  float smallest = 0;
+  for (int y = std::max(0, v - 1); y <= std::min(depth.rows - 1, v + 1); ++y)
+    for (int x = std::max(0, u - 1); x <= std::min(depth.cols - 1, u + 1); ++x) {
+      const float d = depth.at<float>(y, x);
+      if (d > 0 && (smallest == 0 || d < smallest)) smallest = d;
+    }
+  return smallest;
 }
 
 }  // namespace ff

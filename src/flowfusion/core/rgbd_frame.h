@@ -29,5 +29,8 @@ RgbdFrame makeRgbdFrame(double timestamp, const cv::Mat& bgr8, const cv::Mat& de
                         const std::string& name = {});
 // Intensity in [0, 1] from BGR (ITU-R BT.601 luma, as cv::cvtColor).
 cv::Mat intensityFromBgr(const cv::Mat& bgr8);
+// The smallest valid depth (> 0) over the 3x3 pixels around (u, v) of a CV_32F depth image,
+// clipped to the image; 0 when none has depth. What another view saw nearest at a projected point.
+float smallestDepthAround(const cv::Mat& depth, int u, int v);
 
 }  // namespace ff

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/rgbd_frame.h"
 
 namespace ff {
 
@@ -65,6 +67,67 @@ cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
     }
   }
   return r;
+}
+
+cv::Mat hiddenIn(const cv::Mat& depth_a, const cv::Mat& depth_b, const CameraIntrinsics& camera,
+                 const SE3& T_cam_b_cam_a, double margin) {
+  if (depth_a.type() != CV_32FC1 || depth_b.type() != CV_32FC1 || depth_a.size() != depth_b.size() ||
+      depth_a.cols != camera.width || depth_a.rows != camera.height)
+    throw InputError("hiddenIn: both depths must be CV_32FC1 of the camera's size");
+  cv::Mat hidden(depth_a.size(), CV_8U, cv::Scalar(0));
+  cv::parallel_for_(cv::Range(0, depth_a.rows), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* z = depth_a.ptr<float>(v);
+      uint8_t* h = hidden.ptr<uint8_t>(v);
+      for (int u = 0; u < depth_a.cols; ++u) {
+        if (!(z[u] > 0) || !std::isfinite(z[u])) continue;
+        const Eigen::Vector3d X = T_cam_b_cam_a * camera.backproject(u, v, z[u]);
+        if (X.z() <= 0) continue;
+        const Eigen::Vector2d p = camera.project(X);
+        const int pu = static_cast<int>(std::lround(p.x())), pv = static_cast<int>(std::lround(p.y()));
+        if (pu < 0 || pv < 0 || pu >= depth_b.cols || pv >= depth_b.rows) continue;
+        const float nearest = smallestDepthAround(depth_b, pu, pv);
+        if (nearest > 0 && nearest < X.z() * (1 - margin)) h[u] = 255;
+      }
+    }
+  });
+  return hidden;
+}
+
+FlowField chainFlows(const std::vector<const FlowField*>& steps) {
+  if (steps.empty()) throw InputError("chainFlows: no flow to chain");
+  for (const FlowField* f : steps)
+    if (!f || f->uv.type() != CV_32FC2 || f->uv.size() != steps.front()->uv.size())
+      throw InputError("chainFlows: every step must be a CV_32FC2 flow of one size");
+  FlowField chained{steps.front()->uv.clone()};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat reached(chained.uv.size(), CV_32FC2), step;
+  for (size_t i = 1; i < steps.size(); ++i) {
+    // Where the chain has got to; a NaN position is sent outside, where remap gives NaN.
+    for (int v = 0; v < reached.rows; ++v) {
+      const auto* f = chained.uv.ptr<cv::Vec2f>(v);
+      auto* r = reached.ptr<cv::Vec2f>(v);
+      for (int u = 0; u < reached.cols; ++u)
+        r[u] = std::isnan(f[u][0]) || std::isnan(f[u][1]) ? cv::Vec2f(-2.f, -2.f) : cv::Vec2f(u + f[u][0], v + f[u][1]);
+    }
+    cv::remap(steps[i]->uv, step, reached, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(nan, nan));
+    chained.uv += step;
+  }
+  return chained;
+}
+
+cv::Mat largerResidual(const cv::Mat& r_F, const cv::Mat& other) {
+  if (other.empty()) return r_F;
+  if (r_F.type() != CV_32FC1 || other.type() != CV_32FC1 || r_F.size() != other.size())
+    throw InputError("largerResidual: both residuals must be CV_32FC1 of one size");
+  cv::Mat out = r_F.clone();
+  for (int v = 0; v < out.rows; ++v) {
+    const float* b = other.ptr<float>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < out.cols; ++u)
+      if (!std::isnan(o[u]) && !std::isnan(b[u])) o[u] = std::max(o[u], b[u]);
+  }
+  return out;
 }
 
 double finiteMedian(const cv::Mat& values) {

@@ -1,6 +1,7 @@
 #pragma once
 // Ego flow and flow residual (paper Eqs. 8-9; docs/design.md).
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/se3.h"
@@ -21,6 +22,25 @@ cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE
 // If the sizes differ, the optical flow is resampled to the ego flow's size (resizeFlow), so
 // a coarse ego flow gives a coarse residual in that level's pixels.
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
+
+// Pixels of A hidden in B: where A's point, moved by T_cam_b_cam_a, lies behind B's depth (the
+// smallest valid depth over the 3x3 pixels it lands on) by more than margin times its depth in B.
+// There B saw something nearer (a mover passing in front, or a nearer surface by parallax), so
+// the optical flow from A to B matched that, not the point. CV_8U, 255 = hidden; 0 where A has no
+// depth, the point leaves B's image or B has no depth there. depth_a and depth_b: CV_32F metres of
+// the camera's size.
+cv::Mat hiddenIn(const cv::Mat& depth_a, const cv::Mat& depth_b, const CameraIntrinsics& camera,
+                 const SE3& T_cam_b_cam_a, double margin);
+
+// The flow from a frame to the frame steps.size() back, chained through the frames between:
+// steps[0] from the frame to its previous one, steps[i] from that one to its own previous, each
+// sampled (bilinear) where the chain has got to. NaN where the chain leaves the image. All the
+// steps of one size (CV_32FC2); at least one.
+FlowField chainFlows(const std::vector<const FlowField*>& steps);
+
+// The larger of two flow residuals of one frame (CV_32FC1 each, one size): r_F where `other` is
+// NaN or empty, NaN where r_F is (out of view of the previous frame).
+cv::Mat largerResidual(const cv::Mat& r_F, const cv::Mat& other);
 
 // The median of the finite values of a CV_32FC1 image (NaN when it has none).
 double finiteMedian(const cv::Mat& values);

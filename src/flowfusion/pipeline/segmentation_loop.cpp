@@ -83,7 +83,50 @@ void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, M
   // The flow at the segmentation level, resampled once for all of this frame's residuals.
   const FlowField seg_flow = resizeFlow(flow, cv::Size(seg_camera_.width, seg_camera_.height));
   if (config_.consensus.enabled) restartFromFlow(in, flow, seg_flow, previous_background, estimate, timings);
-  if (estimate.odometry.ok) scoreRounds(in, seg_flow, cues.graph, estimate, timings);
+  if (estimate.odometry.ok) {
+    StageTimer timer(timings, "flow");
+    const FlowField seg_long_flow = longBaselineFlow(seg_flow, in, estimate);
+    timer.stop();
+    scoreRounds(in, seg_flow, seg_long_flow, cues.graph, estimate, timings);
+  }
+  keepForLongBaseline(in, seg_flow, estimate);
+}
+
+FlowField SegmentationLoop::longBaselineFlow(const FlowField& seg_flow, const SegmentationInput& in,
+                                             const MotionEstimate& estimate) const {
+  const ScoreConfig& c = config_.scores;
+  if (c.long_baseline_frames == 0 || static_cast<int>(long_baseline_.size()) < c.long_baseline_frames) return {};
+  const LongBaselineFrame& past = long_baseline_.front();
+  const SE3 T_past_cur = past.T_world_cam.inverse() * in.target.T_world_target * estimate.T_target_cur;
+  if (Eigen::AngleAxisd(T_past_cur.rotation()).angle() * 180.0 / M_PI > c.long_baseline_max_turn_deg) return {};
+  // The current frame's flow to its previous, then the kept frames' own, newest first; the
+  // oldest kept frame's flow leads further back than the baseline.
+  std::vector<const FlowField*> steps{&seg_flow};
+  for (auto kept = long_baseline_.rbegin(); kept + 1 != long_baseline_.rend(); ++kept) steps.push_back(&kept->flow);
+  FlowField chained = chainFlows(steps);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  chained.uv.setTo(cv::Scalar(nan, nan), hiddenIn(in.cur.level(config_.pipeline.segmentation_level).depth, past.depth,
+                                                  seg_camera_, T_past_cur, c.model_margin));
+  return chained;
+}
+
+cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur,
+                                               const SE3& T_world_cur) const {
+  if (seg_long_flow.uv.empty()) return {};
+  const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
+  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur), config_.scores.flow_error_px);
+}
+
+void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow,
+                                           const MotionEstimate& estimate) {
+  const int frames = config_.scores.long_baseline_frames;
+  if (frames == 0) return;
+  if (!estimate.odometry.ok || (!long_baseline_.empty() && long_baseline_.back().timestamp != in.previous.frame.timestamp))
+    long_baseline_.clear();
+  if (!estimate.odometry.ok) return;
+  long_baseline_.push_back({seg_flow, in.cur.level(config_.pipeline.segmentation_level).depth,
+                            in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp});
+  while (static_cast<int>(long_baseline_.size()) > frames) long_baseline_.pop_front();
 }
 
 void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowField& flow, const FlowField& seg_flow,
@@ -189,8 +232,9 @@ cv::Mat SegmentationLoop::withheldWhereSeenStatic(const cv::Mat& r_M, const cv::
       r_M, past_views_.sight(depth, T_world_cur, timestamp, s.model_view_min_age_s, s.model_margin, r_M > 0));
 }
 
-void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
-                                   MotionEstimate& estimate, Timings& timings) {
+void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow,
+                                   const FlowField& seg_long_flow, const ClusterGraph& graph, MotionEstimate& estimate,
+                                   Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
   const int level = opt.segmentation_level;
   const RgbdFrame seg_frame = segmentationFrame(in.frame, in.cur);
@@ -231,9 +275,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
-      res.r_F = relativeToFrameError(
-          flowResidualAt(seg_flow, in.cur, T_prev_cur),
-          config_.scores.flow_error_px);
+      res.r_F = largerResidual(
+          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur), config_.scores.flow_error_px),
+          longBaselineResidual(seg_long_flow, in.cur, in.target.T_world_target * estimate.T_target_cur));
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);

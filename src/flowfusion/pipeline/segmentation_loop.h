@@ -10,6 +10,7 @@
 // odometry's source); the target is the tracking target (previous frame, keyframe or the map's
 // prediction), so each frame's mask and weights live in its own pixels.
 #include <chrono>
+#include <deque>
 #include <memory>
 
 #include "flowfusion/core/timings.h"
@@ -88,8 +89,17 @@ class SegmentationLoop {
   // r_M without the pixels whose point an earlier scored frame saw as a static surface (past_views_).
   cv::Mat withheldWhereSeenStatic(const cv::Mat& r_M, const cv::Mat& depth, const SE3& T_world_cur, double timestamp,
                                   Timings& timings) const;
-  void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const ClusterGraph& graph,
-                   MotionEstimate& estimate, Timings& timings);
+  void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const FlowField& seg_long_flow,
+                   const ClusterGraph& graph, MotionEstimate& estimate, Timings& timings);
+  // The flow from the current frame to the oldest kept one (scores.long_baseline_frames back),
+  // chained through the kept frames' flows, NaN where that frame saw something nearer (hiddenIn);
+  // empty until that many are kept, or when the camera turned more than the bound since.
+  FlowField longBaselineFlow(const FlowField& seg_flow, const SegmentationInput& in, const MotionEstimate& estimate) const;
+  // r_F of that flow at the current estimate (relative to its own frame error); empty without it.
+  cv::Mat longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur, const SE3& T_world_cur) const;
+  // Keeps the scored frame for the long baseline; a frame whose odometry failed, or that does not
+  // follow the last kept one, empties the window first.
+  void keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow, const MotionEstimate& estimate);
   // The current frame's intensity and depth at the segmentation level.
   RgbdFrame segmentationFrame(const RgbdFrame& frame, const OdometryFrame& cur) const;
 
@@ -103,6 +113,13 @@ class SegmentationLoop {
   cv::Mat background_;  // the static map's depth rendered for the last scored frame (mapEvidence)
   MotionMemory memory_;  // where objects moved, for the scores' model term (scores.model_memory_s)
   PastViews past_views_;  // what earlier frames saw, for the same term (scores.model_views)
+  struct LongBaselineFrame {
+    FlowField flow;  // to its previous frame, at the segmentation level
+    cv::Mat depth;   // at the segmentation level, for hiddenIn
+    SE3 T_world_cam;
+    double timestamp;
+  };
+  std::deque<LongBaselineFrame> long_baseline_;  // the last scores.long_baseline_frames scored frames
 };
 
 }  // namespace ff

@@ -4,24 +4,17 @@
 #include <string>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/segmentation/score_evidence.h"
 
 namespace ff {
 
 namespace {
 
-// The smallest depth over the 3x3 pixels around (u, v) (0 when none has depth), and whether a
-// mover is among them.
-float smallestDepthAround(const cv::Mat& depth, const cv::Mat& dynamic, int u, int v, bool& mover) {
-  float smallest = 0;
-  mover = false;
-  for (int y = std::max(0, v - 1); y <= std::min(depth.rows - 1, v + 1); ++y)
-    for (int x = std::max(0, u - 1); x <= std::min(depth.cols - 1, u + 1); ++x) {
-      const float d = depth.at<float>(y, x);
-      mover = mover || dynamic.at<uint8_t>(y, x) != 0;
-      if (d > 0 && (smallest == 0 || d < smallest)) smallest = d;
-    }
-  return smallest;
+// Whether a mover is among the 3x3 pixels around (u, v).
+bool moverAround(const cv::Mat& dynamic, int u, int v) {
+  const cv::Rect around = cv::Rect(u - 1, v - 1, 3, 3) & cv::Rect(0, 0, dynamic.cols, dynamic.rows);
+  return cv::countNonZero(dynamic(around)) > 0;
 }
 
 }  // namespace
@@ -52,10 +45,9 @@ PastSight PastViews::sightOf(const Eigen::Vector3d& X_world, double newest_s, do
     if (X.z() <= 0) continue;
     const Eigen::Vector2d p = camera_.project(X);
     if (!camera_.inImage(p.x(), p.y())) continue;
-    bool mover = false;
-    const float d = smallestDepthAround(view.depth, view.dynamic, static_cast<int>(std::lround(p.x())),
-                                        static_cast<int>(std::lround(p.y())), mover);
-    if (!(d > 0) || mover) continue;
+    const int u = static_cast<int>(std::lround(p.x())), v = static_cast<int>(std::lround(p.y()));
+    const float d = smallestDepthAround(view.depth, u, v);
+    if (!(d > 0) || moverAround(view.dynamic, u, v)) continue;
     if (d > X.z() * (1 + margin)) return PastSight::kSeenThrough;
     if (d >= X.z() * (1 - margin)) seen = PastSight::kStaticThere;
   }

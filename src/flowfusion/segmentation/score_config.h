@@ -108,6 +108,15 @@ struct ScoreConfig {
   // flow did not follow), and r_F is scaled by this over the median (relativeToFrameError), so only
   // what stands out from the frame's own error counts (docs/tuning.md#flow_error_px).
   double flow_error_px = 2.0;
+  // Long baseline (our extension; 0 = off): r_F is also taken against the frame this many scored
+  // frames back, along the frames' own flows chained, and the larger of the two counts. A person
+  // walking with the camera's pan moves 1-3 px a frame against the room, as little as a frame's own
+  // flow error, but that adds up over frames. Only while the camera turned at most
+  // long_baseline_max_turn_deg since that frame (a fast turn blurs the frames apart and the chained
+  // flow fails), and not where that frame saw something nearer (hiddenIn, within model_margin)
+  // (docs/tuning.md#long_baseline_frames).
+  int long_baseline_frames = 4;
+  double long_baseline_max_turn_deg = 3.0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
@@ -115,7 +124,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
                                                 model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
-                                                flow_error_px)
+                                                flow_error_px, long_baseline_frames, long_baseline_max_turn_deg)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
