@@ -98,7 +98,7 @@ FlowField SegmentationLoop::longBaselineFlow(const FlowField& seg_flow, const Se
   if (c.long_baseline_frames == 0 || static_cast<int>(long_baseline_.size()) < c.long_baseline_frames) return {};
   const LongBaselineFrame& past = long_baseline_.front();
   const SE3 T_past_cur = past.T_world_cam.inverse() * in.target.T_world_target * estimate.T_target_cur;
-  if (Eigen::AngleAxisd(T_past_cur.rotation()).angle() * 180.0 / M_PI > c.long_baseline_max_turn_deg) return {};
+  if (rotationAngleDeg(T_past_cur) > c.long_baseline_max_turn_deg) return {};
   // The current frame's flow to its previous, then the kept frames' own, newest first; the
   // oldest kept frame's flow leads further back than the baseline.
   std::vector<const FlowField*> steps{&seg_flow};
@@ -121,9 +121,11 @@ void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const Fl
                                            const MotionEstimate& estimate) {
   const int frames = config_.scores.long_baseline_frames;
   if (frames == 0) return;
-  if (!estimate.odometry.ok || (!long_baseline_.empty() && long_baseline_.back().timestamp != in.previous.frame.timestamp))
+  if (!estimate.odometry.ok) {
     long_baseline_.clear();
-  if (!estimate.odometry.ok) return;
+    return;
+  }
+  if (!long_baseline_.empty() && long_baseline_.back().timestamp != in.previous.frame.timestamp) long_baseline_.clear();
   long_baseline_.push_back({seg_flow, in.cur.level(config_.pipeline.segmentation_level).depth,
                             in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp});
   while (static_cast<int>(long_baseline_.size()) > frames) long_baseline_.pop_front();
