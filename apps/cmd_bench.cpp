@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -44,6 +45,9 @@ struct Row {
   double end_to_end_ms = NAN;
   double export_ms = NAN;  // the map export alone (once per run)
   double iou = NAN, precision = NAN, recall = NAN, peak_mib = NAN;
+  // Share of the pixels marked dynamic (mean over frames, %) and the frames with over 5 % marked:
+  // on a static sequence every mark is false (eval static).
+  double marked_percent = NAN, frames_above = NAN;
 };
 
 const std::vector<std::string> kStages = {"odometry", "flow", "consensus", "clustering", "scores", "prediction", "fusion"};
@@ -87,11 +91,17 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
       for (double ms : s.timings.samples(stage)) sum += ms;
     row.map_ms = sum / static_cast<double>(s.frames);
   }
+  const std::string masks = (fs::path(o.out_dir) / "masks").string();
   if (const auto gt_masks = seq.masksDir(); gt_masks && config.pipeline.segmentation) {
-    const auto seg = eval::evaluateSegmentation(*gt_masks, (fs::path(o.out_dir) / "masks").string());
+    const auto seg = eval::evaluateSegmentation(*gt_masks, masks);
     row.iou = seg.mean_iou;
     row.precision = seg.mean_precision;
     row.recall = seg.mean_recall;
+  }
+  if (config.pipeline.segmentation && s.frames > 0) {
+    const auto marks = eval::evaluateStaticMasks(masks);
+    row.marked_percent = 100 * marks.mean_marked;
+    row.frames_above = static_cast<double>(marks.frames_above);
   }
   row.peak_mib = peakResidentMiB();
   return row;
@@ -119,6 +129,29 @@ Row runReference(const TumSequence& seq, const std::string& label, eval::Referen
   row.stage_ms[0] = run.median_ms;
   row.peak_mib = peakResidentMiB();
   return row;
+}
+
+// The masks' figures over the sequences at once, as a change is judged on a scene set
+// (docs/scenes.md): mean mIoU, precision and recall of the rows with true masks, mean marked share
+// of those without (static sequences, where every mark is false).
+void printMaskMeans(const std::vector<Row>& rows) {
+  double iou = 0, precision = 0, recall = 0, marked = 0;
+  int with_masks = 0, without = 0;
+  for (const Row& r : rows) {
+    if (!std::isnan(r.iou)) {
+      iou += r.iou;
+      precision += r.precision;
+      recall += r.recall;
+      ++with_masks;
+    } else if (!std::isnan(r.marked_percent)) {
+      marked += r.marked_percent;
+      ++without;
+    }
+  }
+  if (with_masks > 1)
+    std::printf("mean of the %d sequences with true masks: mIoU %.3f, precision %.3f, recall %.3f\n", with_masks,
+                iou / with_masks, precision / with_masks, recall / with_masks);
+  if (without > 1) std::printf("mean of the %d sequences without: marked %.2f %%\n", without, marked / without);
 }
 
 void execute(const BenchCommand& c) {
@@ -150,7 +183,7 @@ void execute(const BenchCommand& c) {
   headers.push_back("map_ms_mean");
   headers.push_back("e2e_ms");
   headers.push_back("export_ms");
-  for (const char* h : {"mIoU", "precision", "recall", "peak_MiB"}) headers.push_back(h);
+  for (const char* h : {"mIoU", "precision", "recall", "marked_%", "frames>5%", "peak_MiB"}) headers.push_back(h);
   eval::TextTable table(headers);
   using T = eval::TextTable;
   for (const Row& r : rows) {
@@ -161,18 +194,23 @@ void execute(const BenchCommand& c) {
     cells.push_back(T::num(r.end_to_end_ms, 1));
     cells.push_back(T::num(r.export_ms, 0));
     for (double v : {r.iou, r.precision, r.recall}) cells.push_back(T::num(v, 3));
+    cells.push_back(T::num(r.marked_percent, 2));
+    cells.push_back(T::num(r.frames_above, 0));
     cells.push_back(T::num(r.peak_mib, 0));
     table.addRow(cells);
   }
   std::printf("%s", table.str().c_str());
+  printMaskMeans(rows);
   std::printf("ms columns: medians over the frames that ran the stage, wall time, %d threads. ms/frame: whole pipeline\n"
               "without image loading, wall time (the flow beside the odometry and the fusion beside the next frame's\n"
               "tracking count once; their own columns are their own durations). map_ms_mean: prediction + fusion\n"
               "per frame on average (fusion runs every pipeline.fusion_every-th frame). e2e_ms: the whole run's wall\n"
               "time per frame (loading, pipeline, writing masks, the map export amortised; OpenCV rows: loading and\n"
               "odometry). export_ms: map.ply, map_points.ply and previews after the last frame, once.\n"
-              "OpenCV rows: frame to frame, library defaults; their odometry_ms is the whole call. peak_MiB: process "
-              "peak resident memory so far (rows run in order).\n",
+              "OpenCV rows: frame to frame, library defaults; their odometry_ms is the whole call. marked_%%: share of\n"
+              "the pixels marked dynamic, mean over the frames; frames>5%%: frames with more than 5 %% marked (on a\n"
+              "static sequence every mark is false, as eval static). peak_MiB: process peak resident memory so far\n"
+              "(rows run in order).\n",
               cv::getNumThreads());
 }
 
