@@ -77,7 +77,7 @@ TEST(FlowMotion, TheMoverIsFoundAndACapturedOdometryIsTold) {
   const auto split = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
   ASSERT_TRUE(split);
   EXPECT_TRUE(showsMover(*split, c, cfg));
-  EXPECT_TRUE(showsMoverGroup(*split, cfg));
+  EXPECT_TRUE(showsMoverGroup(*split, c, scene.camera, cfg));
   EXPECT_LT(translationErrorM(split->T_b_a_background, T_b_a), 1e-3);
   EXPECT_FALSE(misledOdometry(c, scene.camera, *split, T_b_a, cfg));
   // One that followed the box: the same split, and a capture.
@@ -159,6 +159,48 @@ TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
   EXPECT_LT(rotationAngleDeg(split.T_b_a_background.inverse() * T_b_a), 0.2);
 }
 
+// A wall 2 m away seen by a camera turning `turn_deg` about its y axis, a fifth of the samples (a
+// band of rows) moved by `extra_deg` more, split by hand into those two motions: the separation
+// share is the extra turn over the turn (the image motion of a turn is nearly uniform).
+struct TurningSplit {
+  CameraIntrinsics camera{517.3, 516.5, 318.6, 255.3, 640, 480};
+  FlowCorrespondences c;
+  FlowMotionSplit split;
+  TurningSplit(double turn_deg, double extra_deg) {
+    const auto turn = [](double deg) { return SE3(Eigen::AngleAxisd(deg * M_PI / 180, Eigen::Vector3d::UnitY())); };
+    split.ok = true;
+    split.T_b_a_background = turn(turn_deg);
+    split.T_b_a_mover = turn(turn_deg + extra_deg);
+    for (int v = 8; v < camera.height; v += 16)
+      for (int u = 8; u < camera.width; u += 16) {
+        const Eigen::Vector3d X = camera.backproject(u, v, 2.0);
+        const bool mover = v < camera.height / 5;
+        const Eigen::Vector2d b = camera.project((mover ? split.T_b_a_mover : split.T_b_a_background) * X);
+        c.points_a.emplace_back(X.x(), X.y(), X.z());
+        c.pixels_b.emplace_back(b.x(), b.y());
+        split.group.push_back(mover ? FlowMotionSplit::kMover : FlowMotionSplit::kBackground);
+      }
+  }
+};
+
+TEST(FlowMotion, AStartMoverGroupMustLieApartBeyondTheFlowsErrorAtThatImageMotion) {
+  const ConsensusConfig cfg;  // start_min_separation 0.15
+  // Turning 3 degrees a frame (27 px of flow), a second motion 0.25 degrees off: 8 %, flow error.
+  const TurningSplit fast(3.0, 0.25);
+  EXPECT_NEAR(moverSeparationShare(fast.split, fast.c, fast.camera), 0.25 / 3.0, 0.01);
+  EXPECT_FALSE(showsMoverGroup(fast.split, fast.c, fast.camera, cfg));
+  // The same 0.25 degrees while the camera turns 0.5 degrees a frame: half the image motion, a mover.
+  const TurningSplit slow(0.5, 0.25);
+  EXPECT_NEAR(moverSeparationShare(slow.split, slow.c, slow.camera), 0.5, 0.05);
+  EXPECT_TRUE(showsMoverGroup(slow.split, slow.c, slow.camera, cfg));
+  // A still camera: any separate motion is apart from it.
+  const TurningSplit still(0.0, 0.25);
+  EXPECT_TRUE(std::isinf(moverSeparationShare(still.split, still.c, still.camera)));
+  ConsensusConfig any = cfg;
+  any.start_min_separation = 0;
+  EXPECT_TRUE(showsMoverGroup(fast.split, fast.c, fast.camera, any));
+}
+
 TEST(FlowMotion, TooFewSamplesGiveNoSplit) {
   const AnalyticScene scene = AnalyticScene::make(320, 240);
   const auto a = scene.render(SE3::Identity());
@@ -180,6 +222,9 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.min_mover_share = 1.5;
+  EXPECT_THROW(validate(bad), InputError);
+  bad = ConsensusConfig{};
+  bad.start_min_separation = -0.1;
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.min_captured = 0;

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/timings.h"
 #include "flowfusion/flow/p3p.h"
 
 namespace ff {
@@ -25,6 +26,8 @@ void validate(const ConsensusConfig& c) {
   if (!(c.min_gain >= 0 && c.min_gain <= 1)) throw InputError("consensus.min_gain must be in [0, 1]");
   if (!(c.map_role_margin > 0 && c.map_role_margin <= 1))
     throw InputError("consensus.map_role_margin must be in (0, 1]");
+  if (!(c.start_min_separation >= 0 && std::isfinite(c.start_min_separation)))
+    throw InputError("consensus.start_min_separation must be a finite share >= 0 of the image motion");
 }
 
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
@@ -296,9 +299,26 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
   return static_cast<double>(split.mover_only.size()) >= config.min_mover_share * static_cast<double>(c.size());
 }
 
-bool showsMoverGroup(const FlowMotionSplit& split, const ConsensusConfig& config) {
-  return !split.group.empty() && static_cast<double>(groupSize(split, FlowMotionSplit::kMover)) >=
-                                     config.min_mover_share * static_cast<double>(split.group.size());
+double moverSeparationShare(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera) {
+  std::vector<double> image_motion, separation;
+  for (size_t k = 0; k < c.size() && k < split.group.size(); ++k) {
+    const Eigen::Vector3d X(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z);
+    image_motion.push_back((Eigen::Vector2d(c.pixels_b[k].x, c.pixels_b[k].y) - camera.project(X)).norm());
+    if (split.group[k] == FlowMotionSplit::kMover)
+      separation.push_back((camera.project(split.T_b_a_mover * X) - camera.project(split.T_b_a_background * X)).norm());
+  }
+  if (separation.empty()) return 0.0;
+  const double motion_px = median(image_motion);
+  constexpr double kStill_px = 1e-3;  // below this the image stands still (float rounding of a zero flow)
+  return motion_px > kStill_px ? median(separation) / motion_px : std::numeric_limits<double>::infinity();
+}
+
+bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                     const ConsensusConfig& config) {
+  return !split.group.empty() &&
+         static_cast<double>(groupSize(split, FlowMotionSplit::kMover)) >=
+             config.min_mover_share * static_cast<double>(split.group.size()) &&
+         moverSeparationShare(split, c, camera) >= config.start_min_separation;
 }
 
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,

@@ -46,10 +46,16 @@ struct ConsensusConfig {
   // map in frame B exceeds the other group's by this (a mover filling most of the view); else the
   // larger group is the background.
   double map_role_margin = 0.5;
+  // At the start (no scores yet) the split's mover group is taken for the movers only when its
+  // motion moves its samples at least this share of the image motion (median flow) away from where
+  // the background's motion puts them: the flow's errors that grow with the image motion (blur, the
+  // colour-depth offset, rolling shutter) make a second motion within that share under fast
+  // rotation (docs/tuning.md#start_min_separation). 0 = any.
+  double start_min_separation = 0.15;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
-                                                map_role_margin)
+                                                map_role_margin, start_min_separation)
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -106,10 +112,18 @@ std::optional<FlowMotionSplit> splitFlowAgainst(const FlowCorrespondences& c, co
 // Whether the split shows a mover: at least min_mover_share of the samples are the mover's own.
 bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, const ConsensusConfig& config);
 
+// The median over the mover group's samples of the image distance (px) between where the mover's
+// and the background's motions put them, over the median flow of all samples (px): how far apart
+// the two motions lie against how fast the image moves. Infinite where the image stands still, 0
+// without a mover group.
+double moverSeparationShare(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera);
+
 // Whether the split's mover group (the samples its motion explains better) holds at least
-// min_mover_share of the samples: at the start, before any scores, the best guess of the movers,
-// even where their motion is too close to the background's for samples of their own.
-bool showsMoverGroup(const FlowMotionSplit& split, const ConsensusConfig& config);
+// min_mover_share of the samples and lies start_min_separation apart (moverSeparationShare): at the
+// start, before any scores, the best guess of the movers, even where their motion is too close to
+// the background's for samples of their own, but not within the flow's own error.
+bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                     const ConsensusConfig& config);
 
 // Whether the odometry's motion T_b_a_odometry is to restart from the split's background motion:
 // it explains the mover's own flow (min_captured of the mover's own samples not on the static map,
