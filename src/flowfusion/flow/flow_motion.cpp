@@ -304,8 +304,9 @@ double moverSeparationShare(const FlowMotionSplit& split, const FlowCorresponden
   for (size_t k = 0; k < c.size() && k < split.group.size(); ++k) {
     const Eigen::Vector3d X(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z);
     image_motion.push_back((Eigen::Vector2d(c.pixels_b[k].x, c.pixels_b[k].y) - camera.project(X)).norm());
-    if (split.group[k] == FlowMotionSplit::kMover)
-      separation.push_back((camera.project(split.T_b_a_mover * X) - camera.project(split.T_b_a_background * X)).norm());
+    if (split.group[k] != FlowMotionSplit::kMover) continue;
+    const double d = (camera.project(split.T_b_a_mover * X) - camera.project(split.T_b_a_background * X)).norm();
+    if (std::isfinite(d)) separation.push_back(d);  // not where a motion puts the point behind the camera
   }
   if (separation.empty()) return 0.0;
   const double motion_px = median(image_motion);
