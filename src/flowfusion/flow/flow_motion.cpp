@@ -302,9 +302,9 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
 double moverSeparationShare(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera) {
   std::vector<double> image_motion, separation;
   for (size_t k = 0; k < c.size() && k < split.group.size(); ++k) {
-    const Eigen::Vector3d X(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z);
-    image_motion.push_back((Eigen::Vector2d(c.pixels_b[k].x, c.pixels_b[k].y) - camera.project(X)).norm());
+    image_motion.push_back(std::sqrt(squaredError(c, k, camera, SE3::Identity())));  // the sample's flow
     if (split.group[k] != FlowMotionSplit::kMover) continue;
+    const Eigen::Vector3d X(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z);
     const double d = (camera.project(split.T_b_a_mover * X) - camera.project(split.T_b_a_background * X)).norm();
     if (std::isfinite(d)) separation.push_back(d);  // not where a motion puts the point behind the camera
   }
