@@ -43,6 +43,7 @@ class FernLoopCloser final : public SlamBackEnd {
       p.due_frame = frame_index_;
       p.result.wait();
     }
+    finishing_ = true;
   }
   Trajectory trajectory() const override;
   void loadKeyframes(const std::vector<SavedKeyframe>& keyframes) override;
@@ -88,6 +89,8 @@ class FernLoopCloser final : public SlamBackEnd {
   // Whether the solve moves some keyframe past slam.min_correction_m / _deg from where it is.
   bool significant(const CheckResult& r) const;
   MapCorrection apply(const CheckResult& r);
+  // At the run's end: the graph of every keyframe and edge solved once more.
+  CheckResult finalSolve() const;
 
   const SlamConfig config_;
   const OdometryConfig odometry_;
@@ -103,6 +106,11 @@ class FernLoopCloser final : public SlamBackEnd {
   int loaded_ = 0;             // keyframes of a saved map: ids 0 .. loaded_ - 1, fixed
   int localized_against_ = -1; // the keyframe the last relocalize() found the pose against
   int corrections_ = 0;
+  // Loop edges whose solve was not applied (below slam.min_correction_m / _deg), and finish() called
+  // since the last frame: then a last solve is applied whatever it moves, since no tracking follows
+  // that it could disturb.
+  bool unapplied_loops_ = false;
+  bool finishing_ = false;
   // The background checks' (one at a time, in keyframe order): index, images and graph edges.
   FernIndex index_;
   std::vector<std::shared_ptr<const KeyframeImages>> images_;
@@ -126,6 +134,7 @@ bool FernLoopCloser::needsKeyframe(const SE3& T_world_cam) const {
 
 void FernLoopCloser::frameTracked(const TrackedFrameInfo& info) {
   ++frame_index_;
+  finishing_ = false;  // the run goes on after a finish() (Python's save): tracking follows again
   if (!info.tracking_ok && !lost_from_) lost_from_ = frames_.size();
   // Before a keyframe made now closes the span the lost frames lie in.
   if (info.tracking_ok && lost_from_) bridgeLostSpan(info.frame->timestamp, info.T_world_cam_reported);
@@ -267,8 +276,11 @@ std::optional<MapCorrection> FernLoopCloser::takeCorrection() {
     const CheckResult r = pending_.front().result.get();
     pending_.pop_front();
     closures_ += r.loops;
-    if (r.loops > 0 && significant(r)) return apply(r);
+    if (r.loops == 0) continue;
+    unapplied_loops_ = true;
+    if (significant(r)) return apply(r);
   }
+  if (finishing_ && pending_.empty() && unapplied_loops_) return apply(finalSolve());
   return std::nullopt;
 }
 
@@ -281,7 +293,16 @@ bool FernLoopCloser::significant(const CheckResult& r) const {
   return false;
 }
 
+CheckResult FernLoopCloser::finalSolve() const {
+  PoseGraphOptions options;
+  options.fixed_nodes = loaded_;
+  CheckResult r;
+  r.poses = optimizePoseGraph(poses_, edges_, options);
+  return r;
+}
+
 MapCorrection FernLoopCloser::apply(const CheckResult& r) {
+  unapplied_loops_ = false;
   // Keyframes the check knew take its poses; later ones move with the last of those.
   const size_t known = r.poses.size();
   std::vector<SE3> T_new_old(poses_.size());

@@ -56,7 +56,9 @@ class SlamBackEnd {
   // passes. `scores`: b per pixel, empty for all static. Waits for the checks still running (the
   // index is theirs) without applying them.
   virtual std::optional<SE3> relocalize(const RgbdFrame& frame, const cv::Mat& scores) = 0;
-  // Makes every check still running due, so takeCorrection() returns the rest (the run's end).
+  // Makes every check still running due, so takeCorrection() returns the rest (the run's end), and
+  // after them one last solve of the whole graph when loops were found whose solves moved too
+  // little to be applied while tracking went on.
   virtual void finish() = 0;
   // The trajectory after the last applied correction: each frame's reported pose moved with the
   // keyframes before and after it (as tracked until a loop closes, lost frames bridged).

@@ -47,7 +47,8 @@ struct SlamConfig {
   double max_correction_deg = 20.0;
   // A solved graph moves the tracker and the map only when it moves some keyframe by more than
   // this: below, its own noise (a millimetre or two per loop edge) is no better than the tracker's
-  // alignment to the map. The loop edges stay in the graph for the next solve.
+  // alignment to the map. The loop edges stay in the graph for the next solve, and the run's end
+  // applies the last one whatever it moves.
   double min_correction_m = 0.01;
   double min_correction_deg = 0.5;
   // Pose graph: standard deviations of an odometry edge (between consecutive keyframes) and of a
