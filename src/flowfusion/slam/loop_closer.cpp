@@ -207,8 +207,8 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
   for (const PlaceMatch& m : matches) {
     const SE3 guess = poses[m.keyframe_id].inverse() * poses[id];
     const LoopCheck c = verifyLoop(*images, *images_[m.keyframe_id], guess, odometry_, config_);
-    spdlog::debug("loop {} -> {}: similarity {:.2f}, {} (inliers {:.2f})", id, m.keyframe_id, m.similarity,
-                  c.accepted ? "accepted" : c.reason, c.inlier_fraction);
+    spdlog::debug("loop {} -> {}: similarity {:.2f}, {} (inliers {:.2f}, run back {:.4f} m apart)", id, m.keyframe_id,
+                  m.similarity, c.accepted ? "accepted" : c.reason, c.inlier_fraction, c.backward_gap_m);
     if (!c.accepted) continue;
     edges_.push_back({m.keyframe_id, id, c.T_candidate_query, config_.loop_sigma_m, config_.loop_sigma_deg * kDeg,
                       config_.loop_loss_scale});

@@ -52,6 +52,19 @@ LoopCheck verifyLoop(const KeyframeImages& query, const KeyframeImages& candidat
     check.reason = "inlier fraction " + std::to_string(check.inlier_fraction) + " below slam.min_inlier_fraction";
     return check;
   }
+  if (config.backward_check) {
+    const OdometryResult back =
+        DenseOdometry(at_level).estimate(target, source, r.T_target_source.inverse(), target_weight, source_weight);
+    const SE3 gap = back.T_target_source * r.T_target_source;  // the identity where both agree
+    check.backward_gap_m = translationNorm(gap);
+    if (!back.ok || translationNorm(gap) > config.loop_sigma_m || rotationAngleDeg(gap) > config.loop_sigma_deg) {
+      check.reason = back.ok ? "the alignment run back lands " + std::to_string(translationNorm(gap)) + " m, " +
+                                   std::to_string(rotationAngleDeg(gap)) +
+                                   " deg from it, beyond slam.loop_sigma_m / loop_sigma_deg"
+                             : "the alignment run back: " + back.message;
+      return check;
+    }
+  }
   check.accepted = true;
   return check;
 }

@@ -42,6 +42,10 @@ struct SlamConfig {
   double min_inlier_fraction = 0.65;
   double inlier_depth_m = 0.02;  // * max(1, depth in metres)
   double inlier_intensity = 0.08;  // [0, 1] grey
+  // And the same alignment run back (the candidate to the new keyframe, from the answer) lands
+  // within one loop edge's standard deviations (loop_sigma_m, _deg) of it: people left unmasked
+  // in either keyframe pull the two directions apart (docs/tuning.md#backward-check).
+  bool backward_check = true;
   // The loop found may not move the new keyframe from where the graph has it by more than this.
   double max_correction_m = 0.5;
   double max_correction_deg = 20.0;
@@ -70,7 +74,7 @@ struct SlamConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SlamConfig, loop_closure, keyframe_translation_m,
                                                 keyframe_rotation_deg, cull_covered_keyframes, keyframe_level, fern_count, fern_image_width,
                                                 min_similarity, candidates, min_keyframe_gap, min_inlier_fraction,
-                                                inlier_depth_m, inlier_intensity, max_correction_m,
+                                                inlier_depth_m, inlier_intensity, backward_check, max_correction_m,
                                                 max_correction_deg, min_correction_m, min_correction_deg, odometry_sigma_m, odometry_sigma_deg,
                                                 odometry_loss_scale, loop_sigma_m, loop_sigma_deg, loop_loss_scale, apply_after_frames)
 
