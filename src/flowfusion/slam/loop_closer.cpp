@@ -89,8 +89,9 @@ class FernLoopCloser final : public SlamBackEnd {
   // Whether the solve moves some keyframe past slam.min_correction_m / _deg from where it is.
   bool significant(const CheckResult& r) const;
   MapCorrection apply(const CheckResult& r);
-  // At the run's end: the graph of every keyframe and edge solved once more.
-  CheckResult finalSolve() const;
+  // The graph of every edge so far solved from `poses` (a saved map's keyframes held fixed): after
+  // a check's loops, and once more at the run's end.
+  std::vector<SE3> solveGraph(const std::vector<SE3>& poses) const;
 
   const SlamConfig config_;
   const OdometryConfig odometry_;
@@ -222,11 +223,7 @@ CheckResult FernLoopCloser::check(int id, int localized_from, std::shared_ptr<co
     index_.add(id, std::move(codes));
     images_.push_back(std::move(images));
   }
-  if (result.loops > 0) {
-    PoseGraphOptions options;
-    options.fixed_nodes = loaded_;
-    result.poses = optimizePoseGraph(poses, edges_, options);
-  }
+  if (result.loops > 0) result.poses = solveGraph(poses);
   return result;
 }
 
@@ -280,7 +277,7 @@ std::optional<MapCorrection> FernLoopCloser::takeCorrection() {
     unapplied_loops_ = true;
     if (significant(r)) return apply(r);
   }
-  if (finishing_ && pending_.empty() && unapplied_loops_) return apply(finalSolve());
+  if (finishing_ && pending_.empty() && unapplied_loops_) return apply({0, solveGraph(poses_)});
   return std::nullopt;
 }
 
@@ -293,12 +290,10 @@ bool FernLoopCloser::significant(const CheckResult& r) const {
   return false;
 }
 
-CheckResult FernLoopCloser::finalSolve() const {
+std::vector<SE3> FernLoopCloser::solveGraph(const std::vector<SE3>& poses) const {
   PoseGraphOptions options;
   options.fixed_nodes = loaded_;
-  CheckResult r;
-  r.poses = optimizePoseGraph(poses_, edges_, options);
-  return r;
+  return optimizePoseGraph(poses, edges_, options);
 }
 
 MapCorrection FernLoopCloser::apply(const CheckResult& r) {

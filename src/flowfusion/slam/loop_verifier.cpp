@@ -55,13 +55,16 @@ LoopCheck verifyLoop(const KeyframeImages& query, const KeyframeImages& candidat
   if (config.backward_check) {
     const OdometryResult back =
         DenseOdometry(at_level).estimate(target, source, r.T_target_source.inverse(), target_weight, source_weight);
+    if (!back.ok) {
+      check.reason = "the alignment run back: " + back.message;
+      return check;
+    }
     const SE3 gap = back.T_target_source * r.T_target_source;  // the identity where both agree
     check.backward_gap_m = translationNorm(gap);
-    if (!back.ok || translationNorm(gap) > config.loop_sigma_m || rotationAngleDeg(gap) > config.loop_sigma_deg) {
-      check.reason = back.ok ? "the alignment run back lands " + std::to_string(translationNorm(gap)) + " m, " +
-                                   std::to_string(rotationAngleDeg(gap)) +
-                                   " deg from it, beyond slam.loop_sigma_m / loop_sigma_deg"
-                             : "the alignment run back: " + back.message;
+    const double gap_deg = rotationAngleDeg(gap);
+    if (check.backward_gap_m > config.loop_sigma_m || gap_deg > config.loop_sigma_deg) {
+      check.reason = "the alignment run back lands " + std::to_string(check.backward_gap_m) + " m, " +
+                     std::to_string(gap_deg) + " deg from it, beyond slam.loop_sigma_m / loop_sigma_deg";
       return check;
     }
   }
