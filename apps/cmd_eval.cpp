@@ -103,6 +103,12 @@ void runSeg(const EvalOptions& o) {
   std::printf("mean_iou %f\nmean_precision %f\nmean_recall %f\n", r.mean_iou, r.mean_precision, r.mean_recall);
   std::printf("pooled_iou %f\npooled_precision %f\npooled_recall %f\n", r.pooled.iou, r.pooled.precision,
               r.pooled.recall);
+  const eval::IouLoss& l = r.iou_loss;
+  std::printf("iou_lost_to.false_marks_without_mover %f\niou_lost_to.small_mover_missed %f\n"
+              "iou_lost_to.mover_missed %f\niou_lost_to.false_marks_over_misses %f\n"
+              "iou_lost_to.mover_partly_found %f\n",
+              l.false_marks_without_mover, l.small_mover_missed, l.mover_missed, l.false_marks_over_misses,
+              l.mover_partly_found);
 }
 
 void runStatic(const EvalOptions& o) {

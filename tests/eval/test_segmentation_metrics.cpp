@@ -92,8 +92,50 @@ TEST(EvaluateSegmentation, FoldersMatchedByTimestampWithMeanAndPooledScores) {
     EXPECT_DOUBLE_EQ(r.per_frame[k].timestamp, stamps[k]);
     EXPECT_NEAR(r.per_frame[k].scores.iou, ious[k], 1e-12);
   }
+  EXPECT_EQ(r.per_frame[0].pixels, 40 * 30);
+  // Frame 1 found its mover in part with as many missed as false pixels; nothing else lost.
+  EXPECT_NEAR(r.iou_loss.mover_partly_found, (1 - 1.0 / 3) / 3, 1e-12);
+  EXPECT_NEAR(r.iou_loss.false_marks_without_mover + r.iou_loss.small_mover_missed + r.iou_loss.mover_missed +
+                  r.iou_loss.false_marks_over_misses,
+              0.0, 1e-12);
   EXPECT_EQ(std::filesystem::path(r.per_frame[0].gt_path).filename(), "100.000000.png");
   EXPECT_EQ(std::filesystem::path(r.per_frame[0].est_path).filename(), "100.005000.png");
+}
+
+// Frames of a 100 x 100 image, one of each kind, with known losses that add up to 1 - mean IoU.
+TEST(IouLoss, EachFrameLossGoesToWhatTheFrameShows) {
+  const auto frame = [](int64_t tp, int64_t fp, int64_t fn) {
+    FrameMaskScores f;
+    f.scores = scoresFromCounts(tp, fp, fn);
+    f.pixels = 100 * 100;
+    return f;
+  };
+  const std::vector<FrameMaskScores> frames = {
+      frame(0, 30, 0),     // no mover, 30 pixels marked: IoU 0
+      frame(0, 0, 50),     // a mover of 50 pixels (under 0.65 % of 10,000), missed: IoU 0
+      frame(10, 0, 990),   // a mover of 1,000 pixels, a hundredth found: IoU 0.01
+      frame(600, 300, 100),  // found, more false than missed pixels: IoU 0.6
+      frame(600, 100, 300),  // found, more missed than false pixels: IoU 0.6
+      frame(400, 0, 0),    // found exactly: IoU 1, nothing lost
+  };
+  const IouLoss loss = iouLoss(frames);
+  const double n = 6;
+  EXPECT_NEAR(loss.false_marks_without_mover, 1 / n, 1e-12);
+  EXPECT_NEAR(loss.small_mover_missed, 1 / n, 1e-12);
+  EXPECT_NEAR(loss.mover_missed, 0.99 / n, 1e-12);
+  EXPECT_NEAR(loss.false_marks_over_misses, 0.4 / n, 1e-12);
+  EXPECT_NEAR(loss.mover_partly_found, 0.4 / n, 1e-12);
+  double mean_iou = 0;
+  for (const FrameMaskScores& f : frames) mean_iou += f.scores.iou / n;
+  EXPECT_NEAR(loss.false_marks_without_mover + loss.small_mover_missed + loss.mover_missed +
+                  loss.false_marks_over_misses + loss.mover_partly_found,
+              1 - mean_iou, 1e-12);
+  // The same 50-pixel mover in a 40 x 30 image is 4 % of it: not small.
+  std::vector<FrameMaskScores> small_image = {frame(0, 0, 50)};
+  small_image[0].pixels = 40 * 30;
+  EXPECT_NEAR(iouLoss(small_image).mover_missed, 1.0, 1e-12);
+  // A mover a third found is not missed, though the frame's IoU is under 0.2 (false marks beside it).
+  EXPECT_NEAR(iouLoss({frame(300, 1200, 600)}).false_marks_over_misses, 1 - 300.0 / 2100, 1e-12);
 }
 
 TEST(EvaluateSegmentation, BadFoldersAreInputErrors) {

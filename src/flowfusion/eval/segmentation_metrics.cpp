@@ -114,8 +114,10 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   int64_t tp = 0, fp = 0, fn = 0;
   double iou = 0, precision = 0, recall = 0;
   for (FrameMaskScores& pair : pairs) {
+    const cv::Mat gt_mask = readMaskFile(pair.gt_path);
+    pair.pixels = static_cast<int64_t>(gt_mask.total());
     const MaskScores& s = pair.scores =
-        compareMasks(readMaskFile(pair.gt_path), readMaskFile(pair.est_path), pair.gt_path, pair.est_path);
+        compareMasks(gt_mask, readMaskFile(pair.est_path), pair.gt_path, pair.est_path);
     tp += s.true_positive;
     fp += s.false_positive;
     fn += s.false_negative;
@@ -128,8 +130,28 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   r.mean_precision = precision / n;
   r.mean_recall = recall / n;
   r.pooled = scoresFromCounts(tp, fp, fn);
+  r.iou_loss = iouLoss(pairs);
   r.per_frame = std::move(pairs);
   return r;
+}
+
+IouLoss iouLoss(const std::vector<FrameMaskScores>& frames, double small_mover_share) {
+  IouLoss loss;
+  const double n = static_cast<double>(frames.size());
+  for (const FrameMaskScores& f : frames) {
+    const MaskScores& s = f.scores;
+    const double lost = (1.0 - s.iou) / n;
+    const int64_t truth = s.true_positive + s.false_negative;
+    if (truth == 0)
+      loss.false_marks_without_mover += lost;
+    else if (s.iou < 0.2 && 5 * s.true_positive < truth)
+      (truth < small_mover_share * static_cast<double>(f.pixels) ? loss.small_mover_missed : loss.mover_missed) += lost;
+    else if (s.false_positive > s.false_negative)
+      loss.false_marks_over_misses += lost;
+    else
+      loss.mover_partly_found += lost;
+  }
+  return loss;
 }
 
 StaticMaskResult evaluateStaticMasks(const std::string& est_dir, double above) {

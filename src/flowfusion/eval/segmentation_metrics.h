@@ -37,8 +37,26 @@ struct FrameMaskScores {
   std::string gt_path, est_path;
   double timestamp = 0;  // the ground-truth mask's timestamp (its name), s; NaN when the name is not a number
   MaskScores scores;
+  int64_t pixels = 0;  // the masks' size, width x height
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FrameMaskScores, gt_path, est_path, timestamp, scores)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(FrameMaskScores, gt_path, est_path, timestamp, scores, pixels)
+
+// Where the mean IoU goes: each frame's 1 - IoU over the frame count, under the one thing that
+// frame shows, so that the five add up to 1 - mean IoU. A mover is missed when under a fifth of
+// it is found and the frame's IoU is under 0.2; it is small under small_mover_share of the image.
+// docs/tuning.md uses it to say what the augmented real scenes lose.
+struct IouLoss {
+  double false_marks_without_mover = 0;  // nothing dynamic in the truth, something marked
+  double small_mover_missed = 0;
+  double mover_missed = 0;
+  double false_marks_over_misses = 0;  // a mover found, more false pixels than missed ones
+  double mover_partly_found = 0;       // a mover found, at least as many missed pixels as false ones
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(IouLoss, false_marks_without_mover, small_mover_missed, mover_missed,
+                                   false_marks_over_misses, mover_partly_found)
+
+// 0.0065 of the image: 2,000 pixels at 640x480.
+IouLoss iouLoss(const std::vector<FrameMaskScores>& frames, double small_mover_share = 0.0065);
 
 struct SegmentationResult {
   size_t frames = 0;           // matched mask pairs
@@ -46,10 +64,11 @@ struct SegmentationResult {
   size_t est_unmatched = 0;    // estimated masks without a ground-truth mask
   double mean_iou = 0, mean_precision = 0, mean_recall = 0;  // over frames
   MaskScores pooled;           // counts and scores over all pixels of all frames together
+  IouLoss iou_loss;            // iouLoss(per_frame)
   std::vector<FrameMaskScores> per_frame;  // the pairs, timestamped ones first, in time order
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SegmentationResult, frames, gt_unmatched, est_unmatched, mean_iou,
-                                   mean_precision, mean_recall, pooled, per_frame)
+                                   mean_precision, mean_recall, pooled, iou_loss, per_frame)
 
 // Folders of <timestamp>.png masks. Files are matched by the timestamp in their names (nearest
 // within 0.02 s, each used once, as associate.py); names that are not numbers match by identical
