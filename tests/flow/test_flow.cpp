@@ -97,13 +97,26 @@ TEST(EgoFlow, MatchesAnalyticTranslationAndMarksInvalid) {
   EXPECT_THROW(egoFlow(depth, CameraIntrinsics{100, 100, 40, 30, 160, 120}, T_b_a), InputError);
 }
 
-TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
-  const CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
-  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.0f));
-  depth.at<float>(20, 20) = 0.f;
+// A wall 2 m away at 80x60 without depth at one pixel, seen by a camera moving 4 cm sideways: 2 px
+// of ego flow to the right, so the last two columns leave B's image.
+struct SidewaysWall {
+  CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
+  cv::Mat depth;
   SE3 T_b_a = SE3::Identity();
-  T_b_a.translation() = Eigen::Vector3d(0.04, 0, 0);
-  const cv::Mat e = egoFlow(depth, cam, T_b_a);
+  cv::Mat e;
+  explicit SidewaysWall(cv::Point hole) : depth(60, 80, CV_32F, cv::Scalar(2.0f)) {
+    depth.at<float>(hole) = 0.f;
+    T_b_a.translation() = Eigen::Vector3d(0.04, 0, 0);
+    e = egoFlow(depth, cam, T_b_a);
+  }
+};
+
+TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
+  const SidewaysWall wall({20, 20});
+  const cv::Mat& depth = wall.depth;
+  const CameraIntrinsics& cam = wall.cam;
+  const SE3& T_b_a = wall.T_b_a;
+  const cv::Mat& e = wall.e;
   FlowField of{e.clone()};
   of.uv.at<cv::Vec2f>(20, 20) = {1, 1};
   const cv::Mat r = flowResidual(of, e);
@@ -119,6 +132,52 @@ TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
   const cv::Mat r1 = flowResidual(FlowField{e.clone()}, e1);
   ASSERT_EQ(r1.size(), cv::Size(40, 30));
   EXPECT_LT(medianOf(valuesWhere(r1, cv::Mat(), 0, 2)), 1e-3);
+}
+
+// A static background seen with a smooth error field (a rotation error, a rolling shutter): the
+// optical flow is the ego flow plus an affine field of up to 1.3 px, and a box over a tenth of the
+// image moves 6 px more. With the field taken out the background's residual is gone and the box
+// keeps its own motion.
+TEST(FlowResidual, AnAffineErrorFieldIsTakenOutAndAMoverKeepsItsMotion) {
+  const SidewaysWall wall({5, 5});
+  const cv::Mat& e = wall.e;
+  FlowField of{e.clone()};
+  const cv::Rect box(50, 10, 20, 24);  // 480 of 4,800 pixels
+  for (int v = 0; v < 60; ++v)
+    for (int u = 0; u < 80; ++u) {
+      const double x = u / 80.0 - 0.5, y = v / 60.0 - 0.5;
+      of.uv.at<cv::Vec2f>(v, u) += cv::Vec2f(static_cast<float>(0.5 + 1.2 * x - 0.3 * y), static_cast<float>(-0.4 + 0.6 * y));
+      if (box.contains({u, v})) of.uv.at<cv::Vec2f>(v, u)[0] += 6.f;
+    }
+  cv::Mat background(60, 80, CV_8U, cv::Scalar(255));
+  background(box).setTo(0);
+  background.colRange(76, 80).setTo(0);  // out of view in B
+  EXPECT_GT(medianOf(valuesWhere(flowResidual(of, e), background, 255)), 0.4) << "the field, counted as motion";
+  const cv::Mat r = flowResidualWithoutAffine(of, e, 1.0);
+  double worst = 0;
+  for (const float x : valuesWhere(r, background, 255)) worst = std::max(worst, static_cast<double>(x));
+  // Within 0.1 px: the robust fit still feels the box (a Cauchy weight of 1/37 on each of its pixels).
+  EXPECT_LT(worst, 0.1) << "the background without the field";
+  EXPECT_NEAR(medianOf(valuesWhere(r, background, 0, 0)), 6.0, 0.05) << "the box's own motion";
+  EXPECT_TRUE(std::isnan(r.at<float>(5, 5)));   // no depth
+  EXPECT_TRUE(std::isnan(r.at<float>(30, 79)));  // out of view
+  EXPECT_THROW(flowResidualWithoutAffine(of, e, 0.0), InputError);
+}
+
+// The backward flow undoes the forward one except over a patch: there the pixels landing in it are
+// flagged, once the gap exceeds the tolerance plus 5 % of the flow.
+TEST(InconsistentFlow, FlagsWhereTheBackwardFlowDoesNotBringThePixelBack) {
+  const cv::Size size(60, 40);
+  const FlowField forward{cv::Mat(size, CV_32FC2, cv::Scalar(3.f, -2.f))};  // |f| 3.61: 5 % is 0.18 px
+  FlowField backward{cv::Mat(size, CV_32FC2, cv::Scalar(-3.f, 2.f))};
+  EXPECT_EQ(cv::countNonZero(inconsistentFlow(forward, backward, 0.2)), 0);
+  backward.uv(cv::Rect(20, 10, 10, 10)).setTo(cv::Scalar(-2.5f, 2.f));  // 0.5 px short
+  const cv::Mat strict = inconsistentFlow(forward, backward, 0.2);       // 0.38 px allowed
+  EXPECT_EQ(strict.at<uint8_t>(17, 22), 255) << "lands at (25, 15), inside the patch";
+  EXPECT_EQ(strict.at<uint8_t>(30, 40), 0) << "lands outside it";
+  EXPECT_EQ(cv::countNonZero(inconsistentFlow(forward, backward, 0.4)), 0) << "0.58 px allowed";
+  EXPECT_THROW(inconsistentFlow(forward, FlowField{cv::Mat(cv::Size(30, 20), CV_32FC2)}, 0.2), InputError);
+  EXPECT_THROW(inconsistentFlow(forward, backward, -1.0), InputError);
 }
 
 class FlowOnAnalyticScene : public ::testing::Test {

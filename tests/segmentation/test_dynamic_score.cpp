@@ -409,5 +409,21 @@ TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameD
   EXPECT_THROW(validate(cfg), InputError);
 }
 
+TEST(ScoreConfig, FlowErrorFieldAndConsistencySettingsAreChecked) {
+  nlohmann::json j = ScoreConfig{};
+  EXPECT_EQ(j["flow_error_field"], "affine");
+  j["flow_error_field"] = "none";
+  EXPECT_EQ(j.get<ScoreConfig>().flow_error_field, FlowErrorField::kNone);
+  j["flow_error_field"] = "quadratic";
+  EXPECT_THROW(j.get<ScoreConfig>(), InputError);
+  ScoreConfig cfg;
+  cfg.flow_consistency_px = 0;  // off
+  EXPECT_NO_THROW(validate(cfg));
+  for (const double bad : {-1.0, 101.0, std::nan("")}) {
+    cfg.flow_consistency_px = bad;
+    EXPECT_THROW(validate(cfg), InputError) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace ff

@@ -1,6 +1,7 @@
 #include "flowfusion/flow/flow_residual.h"
 
 #include <algorithm>
+#include <Eigen/Dense>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -47,26 +48,132 @@ cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE
   return flow;
 }
 
-cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
-  if (flow.uv.empty() || flow.uv.type() != CV_32FC2) throw InputError("flowResidual: optical flow is not CV_32FC2");
-  if (ego_flow.empty() || ego_flow.type() != CV_32FC2) throw InputError("flowResidual: ego flow is not CV_32FC2");
+namespace {
+
+// Optical flow - ego flow per pixel (CV_32FC2), NaN where either is invalid or the ego flow leaves
+// the image.
+cv::Mat residualVectors(const FlowField& flow, const cv::Mat& ego_flow, const char* who) {
+  if (flow.uv.empty() || flow.uv.type() != CV_32FC2) throw InputError(std::string(who) + ": optical flow is not CV_32FC2");
+  if (ego_flow.empty() || ego_flow.type() != CV_32FC2) throw InputError(std::string(who) + ": ego flow is not CV_32FC2");
   const FlowField of = resizeFlow(flow, ego_flow.size());
-  cv::Mat r(ego_flow.size(), CV_32FC1);
-  const float max_u = static_cast<float>(r.cols - 1), max_v = static_cast<float>(r.rows - 1);
-  for (int v = 0; v < r.rows; ++v) {
+  cv::Mat d(ego_flow.size(), CV_32FC2);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float max_u = static_cast<float>(d.cols - 1), max_v = static_cast<float>(d.rows - 1);
+  for (int v = 0; v < d.rows; ++v) {
     const auto* a = of.uv.ptr<cv::Vec2f>(v);
     const auto* e = ego_flow.ptr<cv::Vec2f>(v);
-    float* o = r.ptr<float>(v);
+    auto* o = d.ptr<cv::Vec2f>(v);
     // NaN propagates through the arithmetic, which is what marks invalid pixels. A pixel the ego
     // flow takes outside the image was not in view in the other frame: its optical flow matched
     // something else (content entering at the border), so it has no residual.
-    for (int u = 0; u < r.cols; ++u) {
+    for (int u = 0; u < d.cols; ++u) {
       const float tu = static_cast<float>(u) + e[u][0], tv = static_cast<float>(v) + e[u][1];
       const bool in_view = tu >= 0.f && tu <= max_u && tv >= 0.f && tv <= max_v;
-      o[u] = in_view ? std::hypot(a[u][0] - e[u][0], a[u][1] - e[u][1]) : std::numeric_limits<float>::quiet_NaN();
+      o[u] = in_view ? cv::Vec2f(a[u][0] - e[u][0], a[u][1] - e[u][1]) : cv::Vec2f(nan, nan);
+    }
+  }
+  return d;
+}
+
+// The affine field c + A x (x normalised to [-0.5, 0.5) over the image) as its two rows' three
+// coefficients each.
+struct AffineField {
+  Eigen::Vector3d du = Eigen::Vector3d::Zero(), dv = Eigen::Vector3d::Zero();
+  cv::Vec2f at(double x, double y) const {
+    const Eigen::Vector3d q(1.0, x, y);
+    return {static_cast<float>(du.dot(q)), static_cast<float>(dv.dot(q))};
+  }
+};
+
+AffineField fitAffineField(const cv::Mat& d, double scale_px) {
+  struct Sample {
+    double x, y, du, dv;
+  };
+  std::vector<Sample> samples;
+  constexpr int kGridPx = 4;
+  for (int v = 0; v < d.rows; v += kGridPx) {
+    const auto* row = d.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < d.cols; u += kGridPx)
+      if (std::isfinite(row[u][0]) && std::isfinite(row[u][1]))
+        samples.push_back({static_cast<double>(u) / d.cols - 0.5, static_cast<double>(v) / d.rows - 0.5, row[u][0], row[u][1]});
+  }
+  AffineField field;
+  constexpr size_t kMinSamples = 50;  // fewer: no field (a frame almost without depth)
+  constexpr int kIterations = 6;
+  if (samples.size() < kMinSamples) return field;
+  const double inv_scale2 = 1.0 / (scale_px * scale_px);
+  for (int it = 0; it < kIterations; ++it) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs_u = Eigen::Vector3d::Zero(), rhs_v = Eigen::Vector3d::Zero();
+    for (const Sample& s : samples) {
+      const Eigen::Vector3d q(1.0, s.x, s.y);
+      const double eu = s.du - field.du.dot(q), ev = s.dv - field.dv.dot(q);
+      const double w = 1.0 / (1.0 + (eu * eu + ev * ev) * inv_scale2);  // Cauchy
+      normal += w * q * q.transpose();
+      rhs_u += w * s.du * q;
+      rhs_v += w * s.dv * q;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
+    field.du = ldlt.solve(rhs_u);
+    field.dv = ldlt.solve(rhs_v);
+  }
+  return field;
+}
+
+cv::Mat lengths(const cv::Mat& d, const AffineField& field) {
+  cv::Mat r(d.size(), CV_32FC1);
+  for (int v = 0; v < d.rows; ++v) {
+    const auto* row = d.ptr<cv::Vec2f>(v);
+    float* o = r.ptr<float>(v);
+    const double y = static_cast<double>(v) / d.rows - 0.5;
+    for (int u = 0; u < d.cols; ++u) {
+      const cv::Vec2f f = field.at(static_cast<double>(u) / d.cols - 0.5, y);
+      o[u] = std::hypot(row[u][0] - f[0], row[u][1] - f[1]);
     }
   }
   return r;
+}
+
+}  // namespace
+
+cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
+  return lengths(residualVectors(flow, ego_flow, "flowResidual"), AffineField{});
+}
+
+cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow, double scale_px) {
+  if (!(scale_px > 0) || !std::isfinite(scale_px))
+    throw InputError("flowResidualWithoutAffine: the fit's scale must be a finite number of pixels > 0");
+  const cv::Mat d = residualVectors(flow, ego_flow, "flowResidualWithoutAffine");
+  return lengths(d, fitAffineField(d, scale_px));
+}
+
+cv::Mat inconsistentFlow(const FlowField& forward, const FlowField& backward, double tolerance_px) {
+  if (forward.uv.type() != CV_32FC2 || backward.uv.type() != CV_32FC2 || forward.uv.size() != backward.uv.size() ||
+      forward.uv.empty())
+    throw InputError("inconsistentFlow: both flows must be CV_32FC2 of one size");
+  if (!(tolerance_px >= 0) || !std::isfinite(tolerance_px))
+    throw InputError("inconsistentFlow: the tolerance must be a finite number of pixels >= 0");
+  cv::Mat landing(forward.uv.size(), CV_32FC2);
+  for (int v = 0; v < landing.rows; ++v) {
+    const auto* f = forward.uv.ptr<cv::Vec2f>(v);
+    auto* o = landing.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < landing.cols; ++u) o[u] = {static_cast<float>(u) + f[u][0], static_cast<float>(v) + f[u][1]};
+  }
+  cv::Mat back;
+  cv::remap(backward.uv, back, landing, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  constexpr double kShareOfFlow = 0.05;
+  cv::Mat out(forward.uv.size(), CV_8U, cv::Scalar(0));
+  for (int v = 0; v < out.rows; ++v) {
+    const auto* f = forward.uv.ptr<cv::Vec2f>(v);
+    const auto* b = back.ptr<cv::Vec2f>(v);
+    auto* o = out.ptr<uint8_t>(v);
+    for (int u = 0; u < out.cols; ++u) {
+      const double gap = std::hypot(f[u][0] + b[u][0], f[u][1] + b[u][1]);
+      // NaN fails the comparison: a flow that is not finite is not consistent either.
+      if (!(gap <= tolerance_px + kShareOfFlow * std::hypot(f[u][0], f[u][1]))) o[u] = 255;
+    }
+  }
+  return out;
 }
 
 cv::Mat hiddenIn(const cv::Mat& depth_a, const cv::Mat& depth_b, const CameraIntrinsics& camera,

@@ -23,6 +23,23 @@ cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE
 // a coarse ego flow gives a coarse residual in that level's pixels.
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
 
+// r_F with the frame's systematic part taken out: an affine field c + A x, fitted to the residual
+// vectors (optical flow - ego flow) of the valid pixels on a 4-pixel grid by a Cauchy IRLS of scale
+// scale_px from the zero field (6 iterations), is subtracted before the length is taken. A small error of the
+// camera's rotation, the rolling shutter and the colour-depth offset under rotation shift the
+// whole static background by a smooth field of a few pixels, which flowResidual counts as motion
+// everywhere; a mover covering a minority of the view stays out of the robust fit. Only for the
+// residual against the camera's own motion: against another motion (a mover's) the background is
+// the majority and would be fitted away. Same validity and size as flowResidual; scale_px > 0.
+cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow, double scale_px);
+
+// Pixels whose forward flow (A to B) the backward flow (B to A) does not bring back:
+// |forward(x) + backward(x + forward(x))| above tolerance_px plus 5 % of |forward(x)| (backward
+// sampled bilinearly, replicated past the border). There the flow matched nothing reliable (motion
+// blur, occlusion, a textureless patch), so its residual is no evidence. CV_8U, 255 =
+// inconsistent. Both fields CV_32FC2 of one size; tolerance_px >= 0.
+cv::Mat inconsistentFlow(const FlowField& forward, const FlowField& backward, double tolerance_px);
+
 // Pixels of A hidden in B: where A's point, moved by T_cam_b_cam_a, lies behind B's depth (the
 // smallest valid depth over the 3x3 pixels it lands on) by more than margin times its depth in B.
 // There B saw something nearer (a mover passing in front, or a nearer surface by parallax), so

@@ -26,8 +26,9 @@ struct FlowConfig {
   // dis: cv::DISOpticalFlow; farneback: cv::FarnebackOpticalFlow, slower and less accurate on our
   // frames, kept for comparison (docs/tuning.md#flow).
   FlowBackend backend = FlowBackend::Dis;
-  // OpenCV's DIS presets (patch size, stride, pyramid depth, refinement iterations).
-  DisPreset dis_preset = DisPreset::Fast;
+  // OpenCV's DIS presets (patch size, stride, pyramid depth, refinement iterations); medium: its
+  // finer flow separates movers on real frames (docs/tuning.md#flow).
+  DisPreset dis_preset = DisPreset::Medium;
   // Flow is computed on the images downsampled by this factor (1, 2 or 4) and upsampled
   // bilinearly with the vectors scaled back.
   int downscale = 2;

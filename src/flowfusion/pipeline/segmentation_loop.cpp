@@ -50,9 +50,20 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       past_views_(seg_camera_, config.scores.model_view_every_frames, config.scores.model_views) {}
 
 cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur,
-                                         const SE3& T_prev_cur) const {
+                                         const SE3& T_prev_cur, bool camera_motion) const {
   const int level = config_.pipeline.segmentation_level;
-  return flowResidual(seg_flow, egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur)) * std::ldexp(1.0, level);
+  const cv::Mat ego = egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur);
+  // The affine field's robust fit: a residual beyond a pixel of the segmentation level counts less.
+  constexpr double kFieldScalePx = 1.0;
+  const bool field = camera_motion && config_.scores.flow_error_field == FlowErrorField::kAffine;
+  return (field ? flowResidualWithoutAffine(seg_flow, ego, kFieldScalePx) : flowResidual(seg_flow, ego)) *
+         std::ldexp(1.0, level);
+}
+
+cv::Mat SegmentationLoop::inconsistentAt(const FrameCues& cues, const FlowField& seg_flow) const {
+  if (cues.flow_back.uv.empty()) return {};
+  const double tolerance_px = config_.scores.flow_consistency_px / std::ldexp(1.0, config_.pipeline.segmentation_level);
+  return inconsistentFlow(seg_flow, resizeFlow(cues.flow_back, seg_flow.uv.size()), tolerance_px);
 }
 
 RgbdFrame SegmentationLoop::segmentationFrame(const RgbdFrame& frame, const OdometryFrame& cur) const {
@@ -68,6 +79,7 @@ FrameCues SegmentationLoop::computeCues(const RgbdFrame& frame, const OdometryFr
   FrameCues cues;
   auto start = std::chrono::steady_clock::now();
   cues.flow = flow_->compute(frame.intensity, previous.intensity);
+  if (config_.scores.flow_consistency_px > 0) cues.flow_back = flow_->compute(previous.intensity, frame.intensity);
   cues.flow_ms = msSince(start);
   start = std::chrono::steady_clock::now();
   cues.graph = clusterer_->cluster(segmentationFrame(frame, cur), seg_camera_);
@@ -87,7 +99,7 @@ void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, M
     StageTimer timer(timings, "flow");
     const FlowField seg_long_flow = longBaselineFlow(seg_flow, in, estimate);
     timer.stop();
-    scoreRounds(in, seg_flow, seg_long_flow, cues.graph, estimate, timings);
+    scoreRounds(in, seg_flow, seg_long_flow, inconsistentAt(cues, seg_flow), cues.graph, estimate, timings);
   }
   keepForLongBaseline(in, seg_flow, estimate);
 }
@@ -114,7 +126,7 @@ cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, c
                                                const SE3& T_world_cur) const {
   if (seg_long_flow.uv.empty()) return {};
   const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
-  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur), config_.scores.flow_error_px);
+  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), config_.scores.flow_error_px);
 }
 
 void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow,
@@ -199,8 +211,8 @@ cv::Mat SegmentationLoop::moverScores(const FlowField& seg_flow, const OdometryF
                                       MoverRule rule) const {
   const bool own = rule == MoverRule::kOwn;
   const double off_px = (own ? 2 : 1) * config_.consensus.inlier_px;
-  const cv::Mat r_background = flowResidualAt(seg_flow, cur, split.T_b_a_background);
-  const cv::Mat r_mover = flowResidualAt(seg_flow, cur, split.T_b_a_mover);
+  const cv::Mat r_background = flowResidualAt(seg_flow, cur, split.T_b_a_background, false);
+  const cv::Mat r_mover = flowResidualAt(seg_flow, cur, split.T_b_a_mover, false);
   const cv::Mat mover = (r_background > off_px) & (r_mover < (own ? 0.5 : 1.0) * r_background);
   cv::Mat scores;
   mover.convertTo(scores, CV_32F, 1.0 / 255);
@@ -235,8 +247,8 @@ cv::Mat SegmentationLoop::withheldWhereSeenStatic(const cv::Mat& r_M, const cv::
 }
 
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow,
-                                   const FlowField& seg_long_flow, const ClusterGraph& graph, MotionEstimate& estimate,
-                                   Timings& timings) {
+                                   const FlowField& seg_long_flow, const cv::Mat& flow_inconsistent,
+                                   const ClusterGraph& graph, MotionEstimate& estimate, Timings& timings) {
   const PipelineOptions& opt = config_.pipeline;
   const int level = opt.segmentation_level;
   const RgbdFrame seg_frame = segmentationFrame(in.frame, in.cur);
@@ -278,8 +290,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
       res.r_F = largerResidual(
-          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur), config_.scores.flow_error_px),
+          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur, true), config_.scores.flow_error_px),
           longBaselineResidual(seg_long_flow, in.cur, in.target.T_world_target * estimate.T_target_cur));
+      if (!flow_inconsistent.empty()) res.r_F.setTo(std::numeric_limits<float>::quiet_NaN(), flow_inconsistent);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);

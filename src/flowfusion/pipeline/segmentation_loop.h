@@ -49,6 +49,7 @@ struct SegmentationInput {
 // the dense flow from the current image to the previous one and the current frame's clusters.
 struct FrameCues {
   FlowField flow;
+  FlowField flow_back;    // from the previous image to the current one; empty when the check is off
   ClusterGraph graph;     // at the segmentation level
   double flow_ms = 0;     // wall time of each, for Timings ("flow", "clustering")
   double clustering_ms = 0;
@@ -65,8 +66,12 @@ class SegmentationLoop {
 
  private:
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image;
-  // `seg_flow` is the flow resampled to the segmentation level (resizeFlow).
-  cv::Mat flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur, const SE3& T_prev_cur) const;
+  // `seg_flow` is the flow resampled to the segmentation level (resizeFlow). Against the camera's
+  // own motion (camera_motion) without the systematic field scores.flow_error_field names.
+  cv::Mat flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur, const SE3& T_prev_cur,
+                         bool camera_motion) const;
+  // 255 where the flow fails scores.flow_consistency_px's check (segmentation level); empty when off.
+  cv::Mat inconsistentAt(const FrameCues& cues, const FlowField& seg_flow) const;
   // Where the samples' points lay in the previous frame (its depth) against the static map's depth
   // rendered for it (segmentation level; empty: no relations).
   std::vector<MapRelation> mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
@@ -90,7 +95,8 @@ class SegmentationLoop {
   cv::Mat withheldWhereSeenStatic(const cv::Mat& r_M, const cv::Mat& depth, const SE3& T_world_cur, double timestamp,
                                   Timings& timings) const;
   void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const FlowField& seg_long_flow,
-                   const ClusterGraph& graph, MotionEstimate& estimate, Timings& timings);
+                   const cv::Mat& flow_inconsistent, const ClusterGraph& graph, MotionEstimate& estimate,
+                   Timings& timings);
   // The flow from the current frame to the oldest kept one (scores.long_baseline_frames back),
   // chained through the kept frames' flows, NaN where that frame saw something nearer (hiddenIn);
   // empty until that many are kept, or when the camera turned more than the bound since.

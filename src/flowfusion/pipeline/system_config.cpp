@@ -51,6 +51,7 @@ void validate(const SystemConfig& c) {
 SystemConfig liveDefaults() {
   SystemConfig c;
   c.pipeline.budget_ms = kLiveBudgetMs;
+  c.flow.dis_preset = DisPreset::Fast;
   return c;
 }
 

@@ -98,8 +98,10 @@ void validate(const SystemConfig& config);
 // drops); with the budget a late frame skips its optional parts instead of making the next ones
 // wait (docs/tuning.md#budget_ms).
 constexpr double kLiveBudgetMs = 30;
-// The defaults of a live run: SystemConfig{} with pipeline.budget_ms = kLiveBudgetMs. A
-// configuration file or --set still decides (pipeline.budget_ms=0: no budget).
+// The defaults of a live run: SystemConfig{} with pipeline.budget_ms = kLiveBudgetMs and the DIS
+// fast preset (two medium flows a frame cost 16 ms more than two fast ones, which a 30 Hz camera
+// on two cores cannot spare; docs/performance.md). A configuration file or --set still decides
+// (pipeline.budget_ms=0: no budget).
 SystemConfig liveDefaults();
 
 }  // namespace ff

@@ -50,6 +50,8 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.depth_window_px must be in [0, 8] pixels (0 compares the depth where a pixel lands)");
   if (!(c.flow_error_px >= 0 && std::isfinite(c.flow_error_px)))
     throw InputError("scores.flow_error_px must be a finite number of pixels >= 0 (0 turns the scaling off)");
+  if (!(c.flow_consistency_px >= 0 && c.flow_consistency_px <= 100))
+    throw InputError("scores.flow_consistency_px must be in [0, 100] pixels (0 turns the check off)");
 }
 
 }  // namespace ff

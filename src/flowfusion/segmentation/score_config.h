@@ -15,6 +15,15 @@ enum class ModelMotionCue {
 FLOWFUSION_CONFIG_ENUM(ModelMotionCue, "scores.model_motion_cue", {ModelMotionCue::kAnyTerm, "any_term"},
                        {ModelMotionCue::kFlow, "flow"})
 
+// What of the flow residual against the camera's motion is its systematic error rather than motion
+// (docs/tuning.md#flow_error_field).
+enum class FlowErrorField {
+  kNone,    // none: r_F as Eq. 9
+  kAffine,  // an affine field over the image, fitted robustly to the residual (flowResidualWithoutAffine)
+};
+FLOWFUSION_CONFIG_ENUM(FlowErrorField, "scores.flow_error_field", {FlowErrorField::kNone, "none"},
+                       {FlowErrorField::kAffine, "affine"})
+
 struct ScoreConfig {
   // Weights of Eq. 10, the paper's TUM values (Table III). Units: r_I in grey levels (0 to 1),
   // r_D / D_i dimensionless, r_F in pixels of the VGA image.
@@ -117,6 +126,16 @@ struct ScoreConfig {
   // (docs/tuning.md#long_baseline_frames).
   int long_baseline_frames = 4;
   double long_baseline_max_turn_deg = 3.0;
+  // Our extension: a small error of the camera's rotation, the rolling shutter and the colour-depth
+  // offset under rotation shift the whole static background by a smooth field of a few pixels,
+  // which r_F counts as motion everywhere; kAffine takes a robust affine fit of it out of r_F
+  // against the camera's motion (docs/tuning.md#flow_error_field).
+  FlowErrorField flow_error_field = FlowErrorField::kAffine;
+  // Pixels of the input image (our extension; 0 = off): r_F is no evidence where the flow back from
+  // the previous image does not bring the pixel back within this plus 5 % of its flow
+  // (inconsistentFlow): there the flow matched nothing reliable (blur, occlusion, no texture). A
+  // second flow per frame (docs/tuning.md#flow_consistency_px).
+  double flow_consistency_px = 2.0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
@@ -124,7 +143,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
                                                 model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
-                                                flow_error_px, long_baseline_frames, long_baseline_max_turn_deg)
+                                                flow_error_px, long_baseline_frames, long_baseline_max_turn_deg,
+                                                flow_error_field, flow_consistency_px)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
