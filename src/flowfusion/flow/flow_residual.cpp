@@ -75,6 +75,19 @@ cv::Mat residualVectors(const FlowField& flow, const cv::Mat& ego_flow, const ch
   return d;
 }
 
+// Where each pixel x of a flow's first image lands, x + uv(x), as a remap map (CV_32FC2); a NaN
+// flow lands at (-2, -2), outside the image.
+cv::Mat landingPositions(const cv::Mat& uv) {
+  cv::Mat out(uv.size(), CV_32FC2);
+  for (int v = 0; v < out.rows; ++v) {
+    const auto* f = uv.ptr<cv::Vec2f>(v);
+    auto* o = out.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < out.cols; ++u)
+      o[u] = std::isnan(f[u][0]) || std::isnan(f[u][1]) ? cv::Vec2f(-2.f, -2.f) : cv::Vec2f(u + f[u][0], v + f[u][1]);
+  }
+  return out;
+}
+
 // The affine field c + A x (x normalised to [-0.5, 0.5) over the image) as its two rows' three
 // coefficients each.
 struct AffineField {
@@ -153,14 +166,8 @@ cv::Mat inconsistentFlow(const FlowField& forward, const FlowField& backward, do
     throw InputError("inconsistentFlow: both flows must be CV_32FC2 of one size");
   if (!(tolerance_px >= 0) || !std::isfinite(tolerance_px))
     throw InputError("inconsistentFlow: the tolerance must be a finite number of pixels >= 0");
-  cv::Mat landing(forward.uv.size(), CV_32FC2);
-  for (int v = 0; v < landing.rows; ++v) {
-    const auto* f = forward.uv.ptr<cv::Vec2f>(v);
-    auto* o = landing.ptr<cv::Vec2f>(v);
-    for (int u = 0; u < landing.cols; ++u) o[u] = {static_cast<float>(u) + f[u][0], static_cast<float>(v) + f[u][1]};
-  }
   cv::Mat back;
-  cv::remap(backward.uv, back, landing, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  cv::remap(backward.uv, back, landingPositions(forward.uv), cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   constexpr double kShareOfFlow = 0.05;
   cv::Mat out(forward.uv.size(), CV_8U, cv::Scalar(0));
   for (int v = 0; v < out.rows; ++v) {
@@ -208,16 +215,11 @@ FlowField chainFlows(const std::vector<const FlowField*>& steps) {
       throw InputError("chainFlows: every step must be a CV_32FC2 flow of one size");
   FlowField chained{steps.front()->uv.clone()};
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  cv::Mat reached(chained.uv.size(), CV_32FC2), step;
+  cv::Mat step;
   for (size_t i = 1; i < steps.size(); ++i) {
-    // Where the chain has got to; a NaN position is sent outside, where remap gives NaN.
-    for (int v = 0; v < reached.rows; ++v) {
-      const auto* f = chained.uv.ptr<cv::Vec2f>(v);
-      auto* r = reached.ptr<cv::Vec2f>(v);
-      for (int u = 0; u < reached.cols; ++u)
-        r[u] = std::isnan(f[u][0]) || std::isnan(f[u][1]) ? cv::Vec2f(-2.f, -2.f) : cv::Vec2f(u + f[u][0], v + f[u][1]);
-    }
-    cv::remap(steps[i]->uv, step, reached, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(nan, nan));
+    // Where the chain has got to; a NaN position is outside, where remap gives NaN.
+    cv::remap(steps[i]->uv, step, landingPositions(chained.uv), cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+              cv::Scalar(nan, nan));
     chained.uv += step;
   }
   return chained;
