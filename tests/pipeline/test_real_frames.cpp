@@ -76,9 +76,10 @@ TEST(RealFrames, ASecondMotionWithinTheFlowsErrorAtAFastStartIsNoMover) {
   for (const int first : {0, 120}) {
     SystemConfig config;
     const std::vector<double> now = markedShares(seq, config, first + 8, first);
-    // Started at frame 0, frame 1 keeps 3.1 %: a blurred white patch at the left border that stands
-    // out once the residual's affine field is taken out (scores.flow_error_field; 0 % without it).
-    EXPECT_LT(*std::max_element(now.begin(), now.end()), 0.04) << "static fr1/rpy started at frame " << first;
+    // Started at frame 0, frame 1 keeps 5.1 %: a blurred white patch at the left border that stands
+    // out once the residual's affine field is taken out (scores.flow_error_field; 0 % without it,
+    // 3.1 % with the paper's alpha_F).
+    EXPECT_LT(*std::max_element(now.begin(), now.end()), 0.06) << "static fr1/rpy started at frame " << first;
     flowAsFound(config);
     config.consensus.start_min_separation = 0;
     EXPECT_GT(markedShares(seq, config, first + 1, first)[1], 0.15) << "the cause, started at frame " << first;
@@ -219,15 +220,16 @@ TEST(RealFrames, APersonWalkingWithTheCamerasPanIsFoundOverALongerBaseline) {
   // fr1/xyz with two people walking (augment seed 91, the held-out scene n_xyz_people2 of
   // docs/scenes.md): in frames 106-121 a person walks with the slow camera, 1-3 px a frame
   // against the room, within the frame's own flow error; against the frame four back the motion
-  // adds up (scores.long_baseline_frames), and the person is found: mean IoU 0.58 against 0.14.
+  // adds up (scores.long_baseline_frames), and the person is found: mean IoU 0.93 against 0.34
+  // (0.58 against 0.14 with the paper's alpha_F and DIS fast).
   const testing::TempDir tmp;
   const auto augmented = withPeople("fr1_xyz_head300", 91, 2, tmp);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence& seq = *augmented;
   SystemConfig config;
-  EXPECT_GT(meanIoU(seq, config, 106, 121), 0.45) << "frames 106-121 with the long baseline";
+  EXPECT_GT(meanIoU(seq, config, 106, 121), 0.8) << "frames 106-121 with the long baseline";
   config.scores.long_baseline_frames = 0;
-  EXPECT_LT(meanIoU(seq, config, 106, 121), 0.3) << "the cause: one frame pair alone";
+  EXPECT_LT(meanIoU(seq, config, 106, 121), 0.45) << "the cause: one frame pair alone";
 }
 
 }  // namespace

@@ -132,12 +132,12 @@ TEST(DynamicScores, DeltaIsTheSizeNormalisedWeightedResidual) {
   ScoreConfig cfg;
   const DynamicScores s = computeDynamicScores(g, r, cfg);
   ASSERT_EQ(s.delta.size(), 2u);
-  EXPECT_NEAR(s.delta[0], 0.9 * 0.1 + 0.2 / 2.0 + 0.022 * 3.0, 1e-6);
-  EXPECT_NEAR(s.delta[1], 0.9 * 0.2 + 0.2 / 1.0 + 0.022 * 2.0, 1e-6);
+  EXPECT_NEAR(s.delta[0], cfg.alpha_I * 0.1 + 0.2 / 2.0 + cfg.alpha_F * 3.0, 1e-6);
+  EXPECT_NEAR(s.delta[1], cfg.alpha_I * 0.2 + 0.2 / 1.0 + cfg.alpha_F * 2.0, 1e-6);
 
   ResidualImages only_flow;
   only_flow.r_F = r.r_F;
-  EXPECT_NEAR(computeDynamicScores(g, only_flow, cfg).delta[1], 0.022 * 2.0, 1e-6);
+  EXPECT_NEAR(computeDynamicScores(g, only_flow, cfg).delta[1], cfg.alpha_F * 2.0, 1e-6);
   ResidualImages wrong;
   wrong.r_F = cv::Mat(3, 4, CV_32F, cv::Scalar(0));
   EXPECT_THROW(computeDynamicScores(g, wrong, cfg), InputError);
