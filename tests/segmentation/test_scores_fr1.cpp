@@ -84,9 +84,11 @@ TEST(ScoresOnRealData, StaticFr1XyzFramesWithTrueMotionScoreStatic) {
 }
 
 // Each cluster's mean flow residual (pixels of the 640x480 image) over static frame pairs of a
-// shared sequence with their true motion, at the pipeline's segmentation level (1), computed as
-// the pipeline did before issue 29's flow changes (DIS fast, Eq. 9) and as it does now (DIS
-// medium, the affine error field taken out, r_F no evidence where the flow back misses).
+// shared sequence with their true motion, at the pipeline's segmentation level (1; the frames
+// downsampled with cv::resize rather than the odometry's pyramid, close enough for a noise floor
+// and without linking the odometry here), computed as the pipeline did before issue 29's flow
+// changes (DIS fast, Eq. 9) and as it does now (DIS medium, the affine error field taken out, r_F
+// no evidence where the flow back misses).
 struct FlowNoise {
   std::vector<float> before, now;
 };
