@@ -133,16 +133,22 @@ AffineField fitAffineField(const cv::Mat& d, double scale_px) {
   return field;
 }
 
-cv::Mat lengths(const cv::Mat& d, const AffineField& field) {
+// d(x) -= field(x) over the image, in place.
+void subtractField(cv::Mat& d, const AffineField& field) {
+  for (int v = 0; v < d.rows; ++v) {
+    auto* row = d.ptr<cv::Vec2f>(v);
+    const double y = static_cast<double>(v) / d.rows - 0.5;
+    for (int u = 0; u < d.cols; ++u) row[u] -= field.at(static_cast<double>(u) / d.cols - 0.5, y);
+  }
+}
+
+// |d(x)| per pixel (CV_32FC1), NaN where d is.
+cv::Mat lengths(const cv::Mat& d) {
   cv::Mat r(d.size(), CV_32FC1);
   for (int v = 0; v < d.rows; ++v) {
     const auto* row = d.ptr<cv::Vec2f>(v);
     float* o = r.ptr<float>(v);
-    const double y = static_cast<double>(v) / d.rows - 0.5;
-    for (int u = 0; u < d.cols; ++u) {
-      const cv::Vec2f f = field.at(static_cast<double>(u) / d.cols - 0.5, y);
-      o[u] = std::hypot(row[u][0] - f[0], row[u][1] - f[1]);
-    }
+    for (int u = 0; u < d.cols; ++u) o[u] = std::hypot(row[u][0], row[u][1]);
   }
   return r;
 }
@@ -150,14 +156,15 @@ cv::Mat lengths(const cv::Mat& d, const AffineField& field) {
 }  // namespace
 
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
-  return lengths(residualVectors(flow, ego_flow, "flowResidual"), AffineField{});
+  return lengths(residualVectors(flow, ego_flow, "flowResidual"));
 }
 
 cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow, double scale_px) {
   if (!(scale_px > 0) || !std::isfinite(scale_px))
     throw InputError("flowResidualWithoutAffine: the fit's scale must be a finite number of pixels > 0");
-  const cv::Mat d = residualVectors(flow, ego_flow, "flowResidualWithoutAffine");
-  return lengths(d, fitAffineField(d, scale_px));
+  cv::Mat d = residualVectors(flow, ego_flow, "flowResidualWithoutAffine");
+  subtractField(d, fitAffineField(d, scale_px));
+  return lengths(d);
 }
 
 cv::Mat inconsistentFlow(const FlowField& forward, const FlowField& backward, double tolerance_px) {
