@@ -270,6 +270,25 @@ TEST(LargerResidual, TakesTheLargerWhereBothAreKnownAndKeepsRfsGaps) {
   EXPECT_THROW(largerResidual(r_F, cv::Mat(2, 4, CV_32F)), InputError);
 }
 
+TEST(ScaledToNoise, BringsAMedianAboveTheNoiseDownToItAndLeavesAQuieterOne) {
+  // A chain's residual with a median of 2 px and a mover at 8 px, brought to 0.5 px of noise.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat chain(4, 4, CV_32F, cv::Scalar(2.f));
+  chain.at<float>(0, 0) = 8.f;
+  chain.at<float>(3, 3) = nan;
+  const cv::Mat out = scaledToNoise(chain, 0.5);
+  EXPECT_FLOAT_EQ(out.at<float>(1, 1), 0.5f);
+  EXPECT_FLOAT_EQ(out.at<float>(0, 0), 2.f);  // the mover keeps its ratio to the noise
+  EXPECT_TRUE(std::isnan(out.at<float>(3, 3)));
+  // A median at or below the noise, or none: as it is.
+  const cv::Mat quiet(4, 4, CV_32F, cv::Scalar(0.3f));
+  EXPECT_EQ(cv::norm(scaledToNoise(quiet, 0.5), quiet, cv::NORM_INF), 0.0);
+  const cv::Mat none(2, 2, CV_32F, cv::Scalar(nan));
+  EXPECT_TRUE(std::isnan(scaledToNoise(none, 0.5).at<float>(0, 0)));
+  EXPECT_TRUE(scaledToNoise(cv::Mat(), 0.5).empty());
+  EXPECT_THROW(scaledToNoise(chain, 0.0), InputError);
+}
+
 TEST(ChainFlows, AddsEachStepWhereTheChainHasGotToAndLosesWhatLeavesTheImage) {
   // Step 1 shifts every pixel 2 px right; step 2 shifts the left half of its image 1 px down and
   // the right half 3 px up.

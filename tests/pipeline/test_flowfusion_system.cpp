@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -193,6 +194,8 @@ TEST(SystemConfig, BadSettingsAreRejectedByName) {
   rejects([](SystemConfig& c) { c.scores.model_margin = -0.1; }, "scores.model_margin");
   rejects([](SystemConfig& c) { c.scores.model_agreement = 1.5; }, "scores.model_agreement");
   rejects([](SystemConfig& c) { c.scores.agreement_margin = 0; }, "scores.agreement_margin");
+  rejects([](SystemConfig& c) { c.scores.long_baseline_noise_px = -0.5; }, "scores.long_baseline_noise_px");
+  rejects([](SystemConfig& c) { c.scores.long_baseline_noise_px = std::nan(""); }, "scores.long_baseline_noise_px");
   rejects([](SystemConfig& c) { c.pipeline.refine_coarsest_level = 9; }, "pipeline.refine_coarsest_level");
   rejects([](SystemConfig& c) { c.pipeline.refine_iterations = 0; }, "pipeline.refine_iterations");
   rejects([](SystemConfig& c) { c.pipeline.fusion_every = 0; }, "pipeline.fusion_every");

@@ -220,14 +220,15 @@ TEST(RealFrames, APersonWalkingWithTheCamerasPanIsFoundOverALongerBaseline) {
   // fr1/xyz with two people walking (augment seed 91, the held-out scene n_xyz_people2 of
   // docs/scenes.md): in frames 106-121 a person walks with the slow camera, 1-3 px a frame
   // against the room, within the frame's own flow error; against the frame four back the motion
-  // adds up (scores.long_baseline_frames), and the person is found: mean IoU 0.93 against 0.34
-  // (0.58 against 0.14 with the paper's alpha_F and DIS fast).
+  // adds up (scores.long_baseline_frames), and the person is found: mean IoU 0.80 against 0.34
+  // (0.58 against 0.14 with the paper's alpha_F and DIS fast; 0.93 before the chain's noise was
+  // scaled, scores.long_baseline_noise_px: frames 107-110 find less of the person, 0.25-0.61).
   const testing::TempDir tmp;
   const auto augmented = withPeople("fr1_xyz_head300", 91, 2, tmp);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence& seq = *augmented;
   SystemConfig config;
-  EXPECT_GT(meanIoU(seq, config, 106, 121), 0.8) << "frames 106-121 with the long baseline";
+  EXPECT_GT(meanIoU(seq, config, 106, 121), 0.7) << "frames 106-121 with the long baseline";
   config.scores.long_baseline_frames = 0;
   EXPECT_LT(meanIoU(seq, config, 106, 121), 0.45) << "the cause: one frame pair alone";
 }

@@ -123,10 +123,14 @@ FlowField SegmentationLoop::longBaselineFlow(const FlowField& seg_flow, const Se
 }
 
 cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur,
-                                               const SE3& T_world_cur) const {
+                                               const SE3& T_world_cur, const cv::Mat& r_pair) const {
   if (seg_long_flow.uv.empty()) return {};
+  const ScoreConfig& c = config_.scores;
   const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
-  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), config_.scores.flow_error_px);
+  const cv::Mat r = relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), c.flow_error_px);
+  if (c.long_baseline_noise_px <= 0) return r;
+  // std::max keeps the setting where the pair has no finite residual (a NaN median).
+  return scaledToNoise(r, std::max(c.long_baseline_noise_px, finiteMedian(r_pair)));
 }
 
 void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow,
@@ -289,9 +293,10 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
+      const cv::Mat r_pair =
+          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur, true), config_.scores.flow_error_px);
       res.r_F = largerResidual(
-          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur, true), config_.scores.flow_error_px),
-          longBaselineResidual(seg_long_flow, in.cur, in.target.T_world_target * estimate.T_target_cur));
+          r_pair, longBaselineResidual(seg_long_flow, in.cur, in.target.T_world_target * estimate.T_target_cur, r_pair));
       if (!flow_inconsistent.empty()) res.r_F.setTo(std::numeric_limits<float>::quiet_NaN(), flow_inconsistent);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);

@@ -101,8 +101,11 @@ class SegmentationLoop {
   // chained through the kept frames' flows, NaN where that frame saw something nearer (hiddenIn);
   // empty until that many are kept, or when the camera turned more than the bound since.
   FlowField longBaselineFlow(const FlowField& seg_flow, const SegmentationInput& in, const MotionEstimate& estimate) const;
-  // r_F of that flow at the current estimate (relative to its own frame error); empty without it.
-  cv::Mat longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur, const SE3& T_world_cur) const;
+  // r_F of that flow at the current estimate (relative to its own frame error), scaled to at most
+  // the larger of scores.long_baseline_noise_px and the median of the frame pair's r_pair; empty
+  // without it.
+  cv::Mat longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur, const SE3& T_world_cur,
+                               const cv::Mat& r_pair) const;
   // Keeps the scored frame for the long baseline; a frame whose odometry failed, or that does not
   // follow the last kept one, empties the window first.
   void keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow, const MotionEstimate& estimate);

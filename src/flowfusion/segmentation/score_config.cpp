@@ -34,6 +34,8 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.long_baseline_frames must be in [0, 30] frames (0 turns the long baseline off)");
   if (!(c.long_baseline_max_turn_deg > 0 && c.long_baseline_max_turn_deg <= 180))
     throw InputError("scores.long_baseline_max_turn_deg must be in (0, 180] degrees");
+  if (!(c.long_baseline_noise_px >= 0 && c.long_baseline_noise_px <= 100))
+    throw InputError("scores.long_baseline_noise_px must be in [0, 100] pixels (0 leaves the chain's residual as it is)");
   if (!(c.model_views >= 0 && c.model_views <= 1000))
     throw InputError("scores.model_views must be in [0, 1000] frames (0 turns the past views off)");
   if (!(c.model_view_every_frames >= 1 && c.model_view_every_frames <= 1000))

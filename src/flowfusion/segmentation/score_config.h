@@ -128,6 +128,14 @@ struct ScoreConfig {
   // (docs/tuning.md#long_baseline_frames).
   int long_baseline_frames = 4;
   double long_baseline_max_turn_deg = 3.0;
+  // Pixels of the VGA image (our extension; 0 = off): the chain carries every step's error, and
+  // its residual's median is about twice a frame pair's on real and synthetic frames alike. Where
+  // it is above the larger of this and the pair's own median, the chain's residual is scaled down
+  // to that (scaledToNoise): alpha_F was set for a pair's residual on static real frames (median
+  // 0.45-0.49 px, tests/segmentation/test_scores_fr1.cpp), so the chain's noise counts no more than
+  // that. A chain as quiet as that already (synthetic frames: 0.3 px) is left as it is, and with
+  // it the slow movers it finds (docs/tuning.md#long_baseline_noise_px).
+  double long_baseline_noise_px = 0.5;
   // Our extension: a small error of the camera's rotation, the rolling shutter and the colour-depth
   // offset under rotation shift the whole static background by a smooth field of a few pixels,
   // which r_F counts as motion everywhere; kAffine takes a robust affine fit of it out of r_F
@@ -145,7 +153,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
                                                 model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
-                                                flow_error_px, long_baseline_frames, long_baseline_max_turn_deg,
+                                                flow_error_px, long_baseline_frames, long_baseline_max_turn_deg, long_baseline_noise_px,
                                                 flow_error_field, flow_consistency_px)
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
