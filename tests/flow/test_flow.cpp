@@ -219,6 +219,7 @@ TEST_F(FlowOnAnalyticScene, MovingObjectGivesLargeResidualOnItsPixels) {
 }
 
 TEST(RelativeToFrameError, ScalesOnlyAFrameWhoseMedianErrorExceedsTheTypical) {
+  // Also the long baseline's chain brought to a frame pair's noise (scores.long_baseline_noise_px).
   // A frame whose flow failed as a whole (blur): 75 % of the pixels 6 px off, a mover's quarter 24 px.
   cv::Mat r(4, 4, CV_32F, cv::Scalar(6.f));
   r.row(0).setTo(24.f);
@@ -232,7 +233,10 @@ TEST(RelativeToFrameError, ScalesOnlyAFrameWhoseMedianErrorExceedsTheTypical) {
   const cv::Mat good = r / 6.0;
   EXPECT_EQ(cv::norm(relativeToFrameError(good, 2.0), good, cv::NORM_INF), 0.0);
   EXPECT_FLOAT_EQ(relativeToFrameError(r, 0.0).at<float>(2, 2), 6.f);
-  EXPECT_TRUE(std::isnan(finiteMedian(cv::Mat(2, 2, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN())))));
+  const cv::Mat none(2, 2, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  EXPECT_TRUE(std::isnan(finiteMedian(none)));
+  EXPECT_TRUE(std::isnan(relativeToFrameError(none, 2.0).at<float>(0, 0)));  // no median: as it is
+  EXPECT_TRUE(relativeToFrameError(cv::Mat(), 2.0).empty());
 }
 
 TEST(HiddenIn, MarksThePointsTheOtherViewSawSomethingNearerAt) {
@@ -268,25 +272,6 @@ TEST(LargerResidual, TakesTheLargerWhereBothAreKnownAndKeepsRfsGaps) {
   EXPECT_FLOAT_EQ(out.at<float>(0, 3), 2.f);
   EXPECT_EQ(largerResidual(r_F, {}).data, r_F.data);  // no other residual: r_F as it is
   EXPECT_THROW(largerResidual(r_F, cv::Mat(2, 4, CV_32F)), InputError);
-}
-
-TEST(ScaledToNoise, BringsAMedianAboveTheNoiseDownToItAndLeavesAQuieterOne) {
-  // A chain's residual with a median of 2 px and a mover at 8 px, brought to 0.5 px of noise.
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  cv::Mat chain(4, 4, CV_32F, cv::Scalar(2.f));
-  chain.at<float>(0, 0) = 8.f;
-  chain.at<float>(3, 3) = nan;
-  const cv::Mat out = scaledToNoise(chain, 0.5);
-  EXPECT_FLOAT_EQ(out.at<float>(1, 1), 0.5f);
-  EXPECT_FLOAT_EQ(out.at<float>(0, 0), 2.f);  // the mover keeps its ratio to the noise
-  EXPECT_TRUE(std::isnan(out.at<float>(3, 3)));
-  // A median at or below the noise, or none: as it is.
-  const cv::Mat quiet(4, 4, CV_32F, cv::Scalar(0.3f));
-  EXPECT_EQ(cv::norm(scaledToNoise(quiet, 0.5), quiet, cv::NORM_INF), 0.0);
-  const cv::Mat none(2, 2, CV_32F, cv::Scalar(nan));
-  EXPECT_TRUE(std::isnan(scaledToNoise(none, 0.5).at<float>(0, 0)));
-  EXPECT_TRUE(scaledToNoise(cv::Mat(), 0.5).empty());
-  EXPECT_THROW(scaledToNoise(chain, 0.0), InputError);
 }
 
 TEST(ChainFlows, AddsEachStepWhereTheChainHasGotToAndLosesWhatLeavesTheImage) {

@@ -44,6 +44,22 @@ void warpResiduals(const RgbdFrame& a, const RgbdFrame& b, const CameraIntrinsic
     }
 }
 
+// A frame at the segmentation level's size: intensity by area, depth by nearest neighbour (not the
+// odometry's pyramid, see FlowNoise below).
+RgbdFrame atSize(const RgbdFrame& frame, const cv::Size& size) {
+  RgbdFrame out;
+  cv::resize(frame.intensity, out.intensity, size, 0, 0, cv::INTER_AREA);
+  cv::resize(frame.depth, out.depth, size, 0, 0, cv::INTER_NEAREST);
+  return out;
+}
+
+// Each cluster's mean of r (where it has one) appended to values.
+void addClusterMeans(const ClusterGraph& graph, const cv::Mat& r, const char* name, std::vector<float>& values) {
+  const ClusterMeans m = clusterMeans(graph, r, name);
+  for (int c = 0; c < graph.num_clusters; ++c)
+    if (m.has(c)) values.push_back(static_cast<float>(m.mean(c)));
+}
+
 // The value at fraction q of the sorted values (0: the smallest, 1: the largest).
 float percentile(std::vector<float> v, double q) {
   std::sort(v.begin(), v.end());
@@ -118,9 +134,7 @@ void addClusterFlowResiduals(const std::string& dir, size_t step, FlowNoise& out
         !interpolatePose(*seq.groundtruth(), cur.timestamp, T_w_cur))
       continue;
     const cv::Size size(seg_camera.width, seg_camera.height);
-    RgbdFrame seg;
-    cv::resize(cur.intensity, seg.intensity, size, 0, 0, cv::INTER_AREA);
-    cv::resize(cur.depth, seg.depth, size, 0, 0, cv::INTER_NEAREST);
+    const RgbdFrame seg = atSize(cur, size);
     const ClusterGraph graph = clusterer->cluster(seg, seg_camera);
     const cv::Mat ego = egoFlow(seg.depth, seg_camera, T_w_prev.inverse() * T_w_cur);
     const FlowField before = resizeFlow(flow_fast->compute(cur.intensity, prev.intensity), size);
@@ -128,12 +142,8 @@ void addClusterFlowResiduals(const std::string& dir, size_t step, FlowNoise& out
     const FlowField backward = resizeFlow(flow_now->compute(prev.intensity, cur.intensity), size);
     cv::Mat now = flowResidualWithoutAffine(forward, ego, 1.0);
     now.setTo(std::nanf(""), inconsistentFlow(forward, backward, scores.flow_consistency_px / level_px));
-    const ClusterMeans m_before = clusterMeans(graph, flowResidual(before, ego) * level_px, "before");
-    const ClusterMeans m_now = clusterMeans(graph, now * level_px, "now");
-    for (int c = 0; c < graph.num_clusters; ++c) {
-      if (m_before.has(c)) out.before.push_back(static_cast<float>(m_before.mean(c)));
-      if (m_now.has(c)) out.now.push_back(static_cast<float>(m_now.mean(c)));
-    }
+    addClusterMeans(graph, flowResidual(before, ego) * level_px, "before", out.before);
+    addClusterMeans(graph, now * level_px, "now", out.now);
   }
 }
 
@@ -179,13 +189,12 @@ ChainNoise chainFlowResiduals(const std::string& dir, size_t step) {
   const int back = scores.long_baseline_frames;
   ChainNoise out;
   for (size_t i = back; i < seq.size(); i += step) {
-    std::vector<RgbdFrame> frames, seg(back + 1);  // frames[k]: k frames back from i
+    std::vector<RgbdFrame> frames, seg;  // [k]: k frames back from i
     std::vector<SE3> T_w(back + 1);
     for (int k = 0; k <= back; ++k) {
       frames.push_back(seq.load(i - k));
       if (!interpolatePose(*seq.groundtruth(), frames[k].timestamp, T_w[k])) return out;
-      cv::resize(frames[k].intensity, seg[k].intensity, size, 0, 0, cv::INTER_AREA);
-      cv::resize(frames[k].depth, seg[k].depth, size, 0, 0, cv::INTER_NEAREST);
+      seg.push_back(atSize(frames[k], size));
     }
     std::vector<FlowField> steps;
     for (int k = 0; k < back; ++k) steps.push_back(resizeFlow(flow->compute(frames[k].intensity, frames[k + 1].intensity), size));
@@ -202,13 +211,11 @@ ChainNoise chainFlowResiduals(const std::string& dir, size_t step) {
     const cv::Mat inconsistent = inconsistentFlow(
         steps[0], resizeFlow(flow->compute(frames[1].intensity, frames[0].intensity), size), scores.flow_consistency_px / level_px);
     cv::Mat pair = residual(steps[0], T_w[1].inverse() * T_w[0]), chain = residual(chained, T_past_cur);
-    cv::Mat scaled = scaledToNoise(chain, std::max(scores.long_baseline_noise_px, finiteMedian(pair)));
+    cv::Mat scaled = relativeToFrameError(chain, std::max(scores.long_baseline_noise_px, finiteMedian(pair)));
     const ClusterGraph graph = clusterer->cluster(seg[0], seg_camera);
     for (auto [r, values] : {std::pair{&pair, &out.pair}, {&chain, &out.chain}, {&scaled, &out.scaled}}) {
       r->setTo(std::nanf(""), inconsistent);
-      const ClusterMeans m = clusterMeans(graph, *r, "r_F");
-      for (int c = 0; c < graph.num_clusters; ++c)
-        if (m.has(c)) values->push_back(static_cast<float>(m.mean(c)));
+      addClusterMeans(graph, *r, "r_F", *values);
     }
   }
   return out;
@@ -234,7 +241,6 @@ TEST(ScoresOnRealData, TheLongBaselinesResidualOnStaticClustersIsScaledToThePair
   EXPECT_GT(cfg.alpha_F * percentile(noise.chain, 0.9), cfg.theta_b) << "the cause: the chain as it is";
   EXPECT_LT(cfg.alpha_F * percentile(noise.scaled, 0.9), cfg.theta_b);
 }
-
 
 }  // namespace
 }  // namespace ff

@@ -267,13 +267,4 @@ cv::Mat relativeToFrameError(const cv::Mat& r_F, double typical_px) {
   return r_F * (typical_px / median);
 }
 
-cv::Mat scaledToNoise(const cv::Mat& r, double noise_px) {
-  if (!(noise_px > 0) || !std::isfinite(noise_px))
-    throw InputError("scaledToNoise: the noise must be a finite number of pixels > 0");
-  if (r.empty()) return r;
-  const double median = finiteMedian(r);
-  if (!(median > noise_px)) return r;
-  return r * (noise_px / median);
-}
-
 }  // namespace ff

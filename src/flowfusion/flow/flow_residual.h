@@ -62,12 +62,6 @@ cv::Mat largerResidual(const cv::Mat& r_F, const cv::Mat& other);
 // The median of the finite values of a CV_32FC1 image (NaN when it has none).
 double finiteMedian(const cv::Mat& values);
 
-// r scaled down so that its median over the frame (of its finite values) is at most noise_px:
-// r * noise_px / median where the median is larger, r as it is otherwise (also where it has no
-// finite value). A mover covers a minority of the view, so the median is the noise, and the mover
-// keeps its ratio to it. Empty for an empty r; noise_px > 0.
-cv::Mat scaledToNoise(const cv::Mat& r, double noise_px);
-
 // r_F relative to the frame's own flow error: when the median r_F over the frame exceeds
 // `typical_px`, the flow failed on the frame as a whole (motion blur, a large rotation), not on a
 // mover, which covers a minority of the view; r_F is scaled by typical_px / median, so only what

@@ -131,7 +131,7 @@ struct ScoreConfig {
   // Pixels of the VGA image (our extension; 0 = off): the chain carries every step's error, and
   // its residual's median is about twice a frame pair's on real and synthetic frames alike. Where
   // it is above the larger of this and the pair's own median, the chain's residual is scaled down
-  // to that (scaledToNoise): alpha_F was set for a pair's residual on static real frames (median
+  // to that (relativeToFrameError): alpha_F was set for a pair's residual on static real frames (median
   // 0.45-0.49 px, tests/segmentation/test_scores_fr1.cpp), so the chain's noise counts no more than
   // that. A chain as quiet as that already (synthetic frames: 0.3 px) is left as it is, and with
   // it the slow movers it finds (docs/tuning.md#long_baseline_noise_px).
