@@ -8,6 +8,7 @@
 #include "flowfusion/core/error.h"
 #include "flowfusion/segmentation/depth_holes.h"
 #include "flowfusion/segmentation/dynamic_score.h"
+#include "flowfusion/segmentation/map_agreement_mask.h"
 #include "flowfusion/segmentation/score_carry.h"
 #include "flowfusion/segmentation/small_regions.h"
 
@@ -122,15 +123,15 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
     frame_ms_.push_back(msSince(start));
     return result;
   }
-  cv::Mat scores;  // b per pixel at the segmentation level
+  TrackedScores tracked;
   if (!targets_.previous()) {
     result.T_world_cam = T_world_first_;
     result.message = map_reuse_ ? "localized in the saved map" : "first frame";
   } else {
-    scores = track(frame, cur, result);
-    if (!result.tracking_ok && slam_) relocalize(frame, result, scores);
+    tracked = track(frame, cur, result);
+    if (!result.tracking_ok && slam_) relocalize(frame, result, tracked.scores);
   }
-
+  const cv::Mat& scores = tracked.scores;  // b per pixel at the segmentation level
   cv::Mat full_scores;
   if (!scores.empty()) cv::resize(scores, full_scores, frame.depth.size(), 0, 0, cv::INTER_NEAREST);
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
@@ -144,13 +145,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);
-  // Only the written mask: the tracking and the map have used the scores, and pixels without depth
-  // are nothing either can use.
-  if (!full_scores.empty()) {
-    dropSmallInteriorRegions(result.dynamic_mask, config_.pipeline.mask_min_region);
-    if (config_.pipeline.mask_hole_share > 0)
-      fillDepthHoles(result.dynamic_mask, frame.depth, config_.pipeline.mask_hole_share);
-  }
+  if (!full_scores.empty()) finishWrittenMask(frame, tracked.map_agreement, result.dynamic_mask);
   trajectory_.push_back({frame.timestamp, atColourTime(frame, result.T_world_cam)});
   if (slam_) {
     StageTimer timer(timings_, "loop_closure");
@@ -160,7 +155,17 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   return result;
 }
 
-cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result) {
+void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const cv::Mat& map_agreement, cv::Mat& mask) const {
+  // Only the written mask: the tracking and the map have used the scores, and pixels without depth
+  // are nothing either can use.
+  const PipelineOptions& opt = config_.pipeline;
+  if (opt.mask_map_agreement) clearMapAgreement(mask, map_agreement);
+  dropSmallInteriorRegions(mask, opt.mask_min_region);
+  if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share);
+}
+
+FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur,
+                                                        FrameResult& result) {
   const PipelineOptions& opt = config_.pipeline;
   const TrackedFrame& prev = *targets_.previous();
   if (opt.tracking == TrackingMode::FrameToModel) finishFusion();  // choose() renders the map
@@ -196,7 +201,7 @@ cv::Mat FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
   velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
-  return estimate.scores;
+  return {estimate.scores, estimate.map_agreement};
 }
 
 MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,

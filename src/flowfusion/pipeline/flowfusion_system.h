@@ -111,8 +111,18 @@ class FlowFusionSystem {
   // carried scores; a rendered target that fails gives way to the previous frame.
   MotionEstimate firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,
                                const SE3& T_prev_cur_guess, const cv::Mat& carried, FrameResult& result);
-  // Odometry and segmentation against the target; returns the scores (empty without segmentation).
-  cv::Mat track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
+  // What tracking leaves for the frame's mask, at the segmentation level (both empty without
+  // segmentation): the scores b, and where the frame coincides with the stable map.
+  struct TrackedScores {
+    cv::Mat scores;
+    cv::Mat map_agreement;
+  };
+  // Odometry and segmentation against the target.
+  TrackedScores track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);
+  // The written mask after the tracking, the fusion and the next targets have used the scores:
+  // without the pixels the stable map holds (pipeline.mask_map_agreement), the small marks inside
+  // the view (mask_min_region), and with the depth holes of a mover filled (mask_hole_share).
+  void finishWrittenMask(const RgbdFrame& frame, const cv::Mat& map_agreement, cv::Mat& mask) const;
   // Starts fusing the frame into the map on a worker thread (every fusion_every frames; a frame
   // past its budget leaves it to the next, up to 2 x fusion_every frames unfused).
   // Returns whether it started one.

@@ -263,6 +263,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   res.r_D_from_map = in.target.from_model;
   res.r_M = withheldWhereSeenStatic(evidence.r_M, seg_frame.depth, T_world_cur, in.frame.timestamp, timings);
   res.a_M = evidence.a_M;
+  if (!res.a_M.empty()) estimate.map_agreement = res.a_M > 0.5f;  // 1 agrees, 0 or NaN does not
   background_ = evidence.background;
   if (config_.scores.temporal_prior > 0 && !in.previous.scores.empty() && !estimate.restarted_from_flow) {
     const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;

@@ -28,6 +28,9 @@ struct MotionEstimate {
   OdometryResult odometry;   // the last successful full estimate (or the failed first one)
   SE3 T_target_cur;          // current-camera points into the target camera
   cv::Mat scores;            // b per pixel at the segmentation level; empty when none
+  // 255 where the pixel coincides with the stable static map (modelAgreement) at the segmentation
+  // level; empty without a map or a scored frame
+  cv::Mat map_agreement;
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
   bool restarted_from_flow = false;
