@@ -127,11 +127,13 @@ cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, c
   if (seg_long_flow.uv.empty()) return {};
   const ScoreConfig& c = config_.scores;
   const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
-  const cv::Mat r = relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), c.flow_error_px);
-  if (c.long_baseline_noise_px <= 0) return r;
-  // The chain's own error brought to the pair's, or to the setting where the pair's is below it;
-  // std::max keeps the setting where the pair has no finite residual (a NaN median).
-  return relativeToFrameError(r, std::max(c.long_baseline_noise_px, finiteMedian(r_pair)));
+  // The chain's own error brought to the frame's typical one and, with long_baseline_noise_px, to
+  // the pair's, or to that setting where the pair's is below it; std::max keeps the setting where
+  // the pair has no finite residual (a NaN median).
+  double typical_px = c.flow_error_px;
+  if (c.long_baseline_noise_px > 0)
+    typical_px = std::min(typical_px, std::max(c.long_baseline_noise_px, finiteMedian(r_pair)));
+  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), typical_px);
 }
 
 void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow,
