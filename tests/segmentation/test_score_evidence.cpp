@@ -162,5 +162,19 @@ TEST(GroupMotion, ClustersAtDifferentDepthsAreSeparateGroups) {
   EXPECT_TRUE(m.moves[m.root[1]]);
 }
 
+TEST(LongBaselineTypicalError, ThePairsMedianAboveTheNoiseSettingAndNeverAboveTheFramesError) {
+  ScoreConfig c;
+  c.flow_error_px = 2.0;
+  c.long_baseline_noise_px = 0.5;
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, 0.3), 0.5);   // a quiet pair: the setting
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, 0.8), 0.8);   // a noisier pair: its median
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, 2.0), 2.0);   // the pair scaled to the frame's error
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, std::nan("")), 0.5);  // no finite pair residual
+  c.long_baseline_noise_px = 3.0;
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, 0.3), 2.0);   // never above flow_error_px
+  c.long_baseline_noise_px = 0;
+  EXPECT_DOUBLE_EQ(longBaselineTypicalErrorPx(c, 0.3), 2.0);   // off: the frame's error alone
+}
+
 }  // namespace
 }  // namespace ff

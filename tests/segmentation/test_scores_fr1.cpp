@@ -211,7 +211,7 @@ ChainNoise chainFlowResiduals(const std::string& dir, size_t step) {
     const cv::Mat inconsistent = inconsistentFlow(
         steps[0], resizeFlow(flow->compute(frames[1].intensity, frames[0].intensity), size), scores.flow_consistency_px / level_px);
     cv::Mat pair = residual(steps[0], T_w[1].inverse() * T_w[0]), chain = residual(chained, T_past_cur);
-    cv::Mat scaled = relativeToFrameError(chain, std::max(scores.long_baseline_noise_px, finiteMedian(pair)));
+    cv::Mat scaled = relativeToFrameError(chain, longBaselineTypicalErrorPx(scores, finiteMedian(pair)));
     const ClusterGraph graph = clusterer->cluster(seg[0], seg_camera);
     for (auto [r, values] : {std::pair{&pair, &out.pair}, {&chain, &out.chain}, {&scaled, &out.scaled}}) {
       r->setTo(std::nanf(""), inconsistent);

@@ -125,15 +125,11 @@ FlowField SegmentationLoop::longBaselineFlow(const FlowField& seg_flow, const Se
 cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur,
                                                const SE3& T_world_cur, const cv::Mat& r_pair) const {
   if (seg_long_flow.uv.empty()) return {};
-  const ScoreConfig& c = config_.scores;
   const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
   // The chain's own error brought to the frame's typical one and, with long_baseline_noise_px, to
-  // the pair's, or to that setting where the pair's is below it; std::max keeps the setting where
-  // the pair has no finite residual (a NaN median).
-  double typical_px = c.flow_error_px;
-  if (c.long_baseline_noise_px > 0)
-    typical_px = std::min(typical_px, std::max(c.long_baseline_noise_px, finiteMedian(r_pair)));
-  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true), typical_px);
+  // the pair's, or to that setting where the pair's is below it.
+  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true),
+                              longBaselineTypicalErrorPx(config_.scores, finiteMedian(r_pair)));
 }
 
 void SegmentationLoop::keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow,

@@ -1,5 +1,6 @@
 #include "flowfusion/segmentation/score_config.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "flowfusion/core/error.h"
@@ -54,6 +55,12 @@ void validate(const ScoreConfig& c) {
     throw InputError("scores.flow_error_px must be a finite number of pixels >= 0 (0 turns the scaling off)");
   if (!(c.flow_consistency_px >= 0 && c.flow_consistency_px <= 100))
     throw InputError("scores.flow_consistency_px must be in [0, 100] pixels (0 turns the check off)");
+}
+
+double longBaselineTypicalErrorPx(const ScoreConfig& c, double pair_median_px) {
+  if (c.long_baseline_noise_px <= 0) return c.flow_error_px;
+  // std::max returns its first argument when the second is NaN.
+  return std::min(c.flow_error_px, std::max(c.long_baseline_noise_px, pair_median_px));
 }
 
 }  // namespace ff

@@ -158,4 +158,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
 // Throws InputError naming the first bad setting.
 void validate(const ScoreConfig& config);
 
+// The typical error (px) the long baseline's residual is scaled to (relativeToFrameError):
+// flow_error_px, and with long_baseline_noise_px the smaller of that and the larger of the setting
+// and the frame pair's median residual; a NaN median (no finite pair residual) keeps the setting.
+double longBaselineTypicalErrorPx(const ScoreConfig& config, double pair_median_px);
+
 }  // namespace ff
