@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -166,8 +167,31 @@ std::optional<TumSequence> withPeople(const std::string& head, unsigned seed, in
   return TumSequence::open(out.str());
 }
 
-// fr1/rpy with `people` walkers composited by augment (seed): frames first..last, where no mover
-// is in view, on average at most 0.5 % marked with the defaults and more than 2 % with `undo` (the
+// Frames 0..last against the sequence's true masks (masks/<timestamp>.png): each one's IoU, share
+// of the pixels marked where the truth has none, and pose.
+struct RunAgainstTruth {
+  std::vector<double> iou;
+  std::vector<double> falsely_marked;
+  std::vector<SE3> T_world_cam;
+};
+RunAgainstTruth runAgainstTruth(const TumSequence& seq, const SystemConfig& config, int last) {
+  FlowFusionSystem system(config, seq.camera());
+  RunAgainstTruth run;
+  for (int i = 0; i <= last; ++i) {
+    const RgbdFrame frame = seq.load(i);
+    const FrameResult r = system.process(frame);
+    const std::filesystem::path path = std::filesystem::path(*seq.masksDir()) / (timestampName(frame.timestamp) + ".png");
+    const cv::Mat truth = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+    const eval::MaskScores scores = eval::compareMasks(truth, r.dynamic_mask);
+    run.iou.push_back(scores.iou);
+    run.falsely_marked.push_back(static_cast<double>(scores.false_positive) / r.dynamic_mask.total());
+    run.T_world_cam.push_back(r.T_world_cam);
+  }
+  return run;
+}
+
+// fr1/rpy with `people` walkers composited by augment (seed): frames first..last on average at most
+// 0.5 % falsely marked (against the true masks) with the defaults and more than 1.5 % with `undo` (the
 // cause the default fixes). Both causes below were first marked by the fast start's mover group,
 // which consensus.start_min_separation no longer takes: they are shown with it back.
 void expectFixedWithPeople(unsigned seed, int people, int first, int last, void (*undo)(SystemConfig&),
@@ -177,12 +201,15 @@ void expectFixedWithPeople(unsigned seed, int people, int first, int last, void 
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence& seq = *augmented;
   SystemConfig config;
-  EXPECT_LT(meanOf(markedShares(seq, config, last), first, last), 0.005)
-      << "frames " << first << "-" << last << " of augment seed " << seed;
+  const double fixed = meanOf(runAgainstTruth(seq, config, last).falsely_marked, first, last);
   flowAsFound(config);
   undo(config);
   config.consensus.start_min_separation = 0;
-  EXPECT_GT(meanOf(markedShares(seq, config, last), first, last), 0.02) << "the cause: " << why;
+  const double cause = meanOf(runAgainstTruth(seq, config, last).falsely_marked, first, last);
+  std::printf("[ measured ] frames %d-%d falsely marked %.2f %%, with the cause %.2f %%\n", first, last, 100 * fixed,
+              100 * cause);
+  EXPECT_LT(fixed, 0.005) << "frames " << first << "-" << last << " of augment seed " << seed;
+  EXPECT_GT(cause, 0.015) << "the cause: " << why;
 }
 
 TEST(RealFrames, AScreensSpecklesDoNotTakeTheMotionOfASurfaceBehindThem) {
@@ -202,24 +229,6 @@ TEST(RealFrames, ASurfaceEarlierFramesSawStandingThereIsNotTakenForTheMoverBesid
   // scores.model_views that term is withheld and nothing is marked there.
   expectFixedWithPeople(
       92, 1, 118, 130, [](SystemConfig& c) { c.scores.model_views = 0; }, "the map's occlusion alone");
-}
-
-// Frames 0..last against the sequence's true masks (masks/<timestamp>.png): each one's IoU and pose.
-struct RunAgainstTruth {
-  std::vector<double> iou;
-  std::vector<SE3> T_world_cam;
-};
-RunAgainstTruth runAgainstTruth(const TumSequence& seq, const SystemConfig& config, int last) {
-  FlowFusionSystem system(config, seq.camera());
-  RunAgainstTruth run;
-  for (int i = 0; i <= last; ++i) {
-    const RgbdFrame frame = seq.load(i);
-    const FrameResult r = system.process(frame);
-    const std::filesystem::path truth = std::filesystem::path(*seq.masksDir()) / (timestampName(frame.timestamp) + ".png");
-    run.iou.push_back(eval::compareMasks(cv::imread(truth.string(), cv::IMREAD_GRAYSCALE), r.dynamic_mask).iou);
-    run.T_world_cam.push_back(r.T_world_cam);
-  }
-  return run;
 }
 
 // The mean IoU of frames first..last.
@@ -249,8 +258,8 @@ TEST(RealFrames, TheBackgroundBesideAPersonThatTheMapHoldsIsNotWritten) {
   // of docs/scenes.md): in frames 83-99 the wall and the monitor's frame above the person, mapped
   // long before, were written dynamic with the person's clusters (held by their neighbours, the
   // carried score and the motion memory). Their pixels coincide with the stable map in depth and
-  // grey level, and the written mask leaves them out (pipeline.mask_map_agreement): mean IoU 0.86
-  // against 0.69, 3,800 falsely marked pixels a frame against 13,700. Only the written mask: the
+  // grey level, and the written mask leaves them out (pipeline.mask_map_agreement): mean IoU 0.85
+  // against 0.68, 4,100 falsely marked pixels a frame against 14,800. Only the written mask: the
   // poses are the same.
   const testing::TempDir tmp;
   const auto augmented = withPeople("fr1_rpy_head150", 2901, 1, tmp);
@@ -263,6 +272,22 @@ TEST(RealFrames, TheBackgroundBesideAPersonThatTheMapHoldsIsNotWritten) {
   EXPECT_LT(meanOf(without.iou, 83, 99), 0.75) << "the cause: the background written with the person";
   for (int i = 0; i <= 99; ++i)
     EXPECT_TRUE(with.T_world_cam[i].isApprox(without.T_world_cam[i], 1e-12)) << "frame " << i;
+}
+
+TEST(RealFrames, APersonFoundBeforeARestartFromTheFlowIsNotLost) {
+  // fr1/rpy with a person walking at the right (augment seed 2901, rpy_people of docs/scenes.md):
+  // in frames 1-6 the fast rotation misleads the first odometry and the flow's consensus restarts
+  // it in four of them. With nothing carried after a restart, frame 6 loses the person, and the
+  // static scores carried from then on hold them lost: frames 7-15 mean IoU 0.05. Carried through
+  // the restarts where they said dynamic (scores.restart_keeps_movers), the previous scores keep
+  // the person: 0.94.
+  const testing::TempDir tmp;
+  const auto augmented = withPeople("fr1_rpy_head150", 2901, 1, tmp);
+  if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
+  SystemConfig config;
+  EXPECT_GT(meanIoU(*augmented, config, 7, 15), 0.8) << "frames 7-15 with the movers carried";
+  config.scores.restart_keeps_movers = false;
+  EXPECT_LT(meanIoU(*augmented, config, 7, 15), 0.3) << "the cause: nothing carried after a restart";
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "flowfusion/flow/flow_residual.h"
 #include "flowfusion/segmentation/dynamic_score.h"
 #include "flowfusion/segmentation/score_carry.h"
+#include "flowfusion/segmentation/score_evidence.h"
 
 namespace ff {
 
@@ -249,6 +250,18 @@ cv::Mat SegmentationLoop::withheldWhereSeenStatic(const cv::Mat& r_M, const cv::
       r_M, past_views_.sight(depth, T_world_cur, timestamp, s.model_view_min_age_s, s.model_margin, r_M > 0));
 }
 
+cv::Mat SegmentationLoop::carriedPrior(const SegmentationInput& in, const MotionEstimate& estimate) const {
+  const ScoreConfig& s = config_.scores;
+  if (s.temporal_prior <= 0 || in.previous.scores.empty()) return {};
+  if (estimate.restarted_from_flow && !s.restart_keeps_movers) return {};
+  constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
+  const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
+  cv::Mat prior = carryScores(in.previous.scores, in.previous.depthAt(config_.pipeline.segmentation_level),
+                              seg_camera_, T_prev_cur.inverse(), kNone);
+  if (estimate.restarted_from_flow) prior.setTo(kNone, prior <= static_cast<float>(kDynamicScore));
+  return prior;
+}
+
 void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField& seg_flow,
                                    const FlowField& seg_long_flow, const cv::Mat& flow_inconsistent,
                                    const ClusterGraph& graph, MotionEstimate& estimate, Timings& timings) {
@@ -263,11 +276,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   res.a_M = evidence.a_M;
   if (!res.a_M.empty()) estimate.map_agreement = res.a_M > 0.5f;  // 1 agrees, 0 or NaN does not
   background_ = evidence.background;
-  if (config_.scores.temporal_prior > 0 && !in.previous.scores.empty() && !estimate.restarted_from_flow) {
-    const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
-    res.prior = carryScores(in.previous.scores, in.previous.depthAt(level), seg_camera_, T_prev_cur.inverse(),
-                            std::numeric_limits<float>::quiet_NaN());
-  }
+  res.prior = carriedPrior(in, estimate);
   res.memory = memory_.recall(in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
   if (!estimate.flow_mover.empty()) {
     // The flow's own mover is a mover a priori; elsewhere the carried scores, if any.

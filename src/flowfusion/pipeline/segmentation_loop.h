@@ -97,6 +97,10 @@ class SegmentationLoop {
   // r_M without the pixels whose point an earlier scored frame saw as a static surface (past_views_).
   cv::Mat withheldWhereSeenStatic(const cv::Mat& r_M, const cv::Mat& depth, const SE3& T_world_cur, double timestamp,
                                   Timings& timings) const;
+  // p_i (scores.temporal_prior): the previous frame's scores carried to the current frame at the
+  // estimate, NaN where none lands; after a restart from the flow only its movers
+  // (scores.restart_keeps_movers) or none. Empty without previous scores or the prior.
+  cv::Mat carriedPrior(const SegmentationInput& in, const MotionEstimate& estimate) const;
   void scoreRounds(const SegmentationInput& in, const FlowField& seg_flow, const FlowField& seg_long_flow,
                    const cv::Mat& flow_inconsistent, const ClusterGraph& graph, MotionEstimate& estimate,
                    Timings& timings);

@@ -78,6 +78,12 @@ struct ScoreConfig {
   // lambda_T (our extension; 0 = the paper): lambda_T sum_i (b_i - p_i)^2 is added to E(b), p_i the
   // previous scores carried along the motion (docs/tuning.md#temporal_prior).
   double temporal_prior = 0.5;
+  // After the odometry was restarted from the flow (consensus), p_i is carried only where the
+  // previous scores say dynamic (true; false: none carried after a restart). The restart says the
+  // first odometry, weighted by those scores, followed a motion they called static: their static
+  // part is the suspect half, while the movers they hold lie where the restarted motion carries
+  // them (docs/tuning.md#restart_keeps_movers).
+  bool restart_keeps_movers = true;
   // Seconds (our extension; 0 = off): a region that belonged to a moving group of clusters within
   // this time counts as moving for model_needs_motion, so a person who stops (stands, sits) in
   // front of the mapped background stays dynamic while they cover it. Only motion in two frames in
@@ -150,7 +156,8 @@ struct ScoreConfig {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, theta_b, theta_t, lambda_G,
                                                 body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
-                                                agreement_margin, agreement_intensity, temporal_prior, model_memory_s,
+                                                agreement_margin, agreement_intensity, temporal_prior, restart_keeps_movers,
+                                                model_memory_s,
                                                 model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
                                                 flow_error_px, long_baseline_frames, long_baseline_max_turn_deg, long_baseline_noise_px,
