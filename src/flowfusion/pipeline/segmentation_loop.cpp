@@ -177,7 +177,9 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   if (shows_mover) estimate.flow_mover = mover;
   estimate.flow_mover_holds = start_movers;
   if (!misled) return;
-  // The carried scores belong to the motion just rejected: the split's mover replaces them.
+  // The carried scores weighted the motion just rejected: the restarted odometry is weighted by the
+  // split's mover alone. Their movers come back as the prior once carried with the restarted
+  // motion (carriedPrior, scores.restart_keeps_movers).
   StageTimer timer(timings, "odometry");
   const OdometryResult again = odometry_.estimate(in.cur, *in.target.odo, in.T_target_prev * split->T_b_a_background,
                                                   staticWeights(mover), *in.target.weights);
