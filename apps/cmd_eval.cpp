@@ -1,9 +1,10 @@
-// `flowfusion eval ate|rpe|seg|map`: the TUM benchmark's trajectory metrics, mask metrics and the
-// distance between two map point clouds.
+// `flowfusion eval ate|rpe|seg|static|clusters|map`: the TUM benchmark's trajectory metrics, mask
+// metrics, a run's cluster log against the true masks and the distance between two map point clouds.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "command.h"
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/eval/cluster_truth.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "flowfusion/fusion/map_compare.h"
@@ -36,6 +38,8 @@ struct EvalOptions {
   int pixel_step = 2;      // eval map from a sequence: every this many pixels of a row and column
   double voxel_m = 0.004;  // eval map from a sequence: one truth point per cube of this size
   std::string align_by;    // eval map: the run's trajectory whose Horn alignment moves TEST
+  std::string frames;      // eval clusters: FIRST:LAST of the true masks
+  bool all = false;        // eval clusters: the static clusters too
 };
 
 void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit) {
@@ -174,6 +178,12 @@ void runMap(const EvalOptions& o) {
   printDifference("reference_to_test", r.reference_to_test);
 }
 
+void runClusters(const EvalOptions& o) {
+  const FrameRange range = o.frames.empty() ? FrameRange{} : parseFrameRange(o.frames);
+  const int last = range.last < 0 ? std::numeric_limits<int>::max() : range.last;
+  std::cout << eval::clusterTruthCsv(eval::clusterTruth(o.gt, o.est), range.first, last, o.all);
+}
+
 const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
   auto* eval = app.add_subcommand("eval", "Evaluate trajectories (TUM ATE/RPE), dynamic masks and maps");
   eval->require_subcommand(1);
@@ -220,6 +230,15 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
                   "TUM folder of the masks' colour and depth images (default: the folder holding GT_MASKS)");
   seg->add_flag("--overwrite", opts->overwrite, "replace an existing contact sheet");
   seg->callback([opts] { runSeg(*opts); });
+
+  auto* clusters = eval->add_subcommand(
+      "clusters", "A run's cluster log (run --cluster-log) against the true masks: each cluster's evidence, "
+                  "score, share of true pixels and verdict (hit, missed, false, static), as CSV");
+  clusters->add_option("GT_MASKS", opts->gt, "folder of ground-truth masks")->required();
+  clusters->add_option("CLUSTERS", opts->est, "the run's clusters/ folder")->required();
+  clusters->add_option("--frames", opts->frames, "FIRST:LAST: only these frames (indices of the true masks)");
+  clusters->add_flag("--all", opts->all, "also the clusters that are static in both (by default left out)");
+  clusters->callback([opts] { runClusters(*opts); });
 
   auto* stat = eval->add_subcommand(
       "static", "False marks of a run on a static scene (every marked pixel is wrong): the share of each "

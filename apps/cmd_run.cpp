@@ -63,7 +63,8 @@ class ProgressSink : public ResultSink {
 
 struct RunCommand {
   std::string sequence, out, mcap, map_in;
-  bool overwrite = false, overlays = false, no_map = false, quiet = false, report = false, show = false;
+  bool overwrite = false, overlays = false, cluster_log = false, no_map = false, quiet = false, report = false,
+       show = false;
   bool realtime = false;
   double rate = 1.0;  // --rate: times the recorded speed
   SystemOptions system;
@@ -112,11 +113,13 @@ void printSummary(const RunSummary& s, const FrameSource& source) {
 
 void execute(const RunCommand& c) {
   if (c.realtime) checkRate(c.rate);
-  const SystemConfig config = c.system.systemConfig(c.realtime ? liveDefaults() : SystemConfig{});
+  SystemConfig config = c.system.systemConfig(c.realtime ? liveDefaults() : SystemConfig{});
+  if (c.cluster_log) config.pipeline.cluster_log = true;
   FilesSinkOptions files;
   files.out_dir = c.out;
   files.overwrite = c.overwrite;
   files.write_overlays = c.overlays;
+  files.write_clusters = config.pipeline.cluster_log;
   files.export_map = !c.no_map;
   FilesSink sink(files);
   refuseOverlap(c.out, c.sequence, "the input sequence");
@@ -168,6 +171,9 @@ const RegisterCommand reg("1-run", [](CLI::App& app) {
   cmd->add_option("--mcap", c->mcap,
                   "Also write the run as an MCAP file for Foxglove (pose, path, colour, mask, depth, calibration, map)");
   cmd->add_flag("--overlays", c->overlays, "Also write overlays/<timestamp>.png (dynamic pixels in red)");
+  cmd->add_flag("--cluster-log", c->cluster_log,
+                "Also write clusters/<timestamp>.csv (each cluster's evidence and score) and .png (its pixels); "
+                "nothing without segmentation. See docs/formats.md");
   cmd->add_flag("--no-map", c->no_map, "Skip map.ply, map_points.ply, preview/ and map.ffmap");
   cmd->add_option("--map-in", c->map_in,
                   "Continue in a previous run's map: its folder (or its map.ffmap). The run finds its first pose "

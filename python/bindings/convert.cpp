@@ -122,6 +122,7 @@ py::array arrayFromMat(const cv::Mat& mat) {
   switch (m.depth()) {
     case CV_8U: out = py::array_t<uint8_t>(shape); break;
     case CV_16U: out = py::array_t<uint16_t>(shape); break;
+    case CV_32S: out = py::array_t<int32_t>(shape); break;
     case CV_32F: out = py::array_t<float>(shape); break;
     default: throw std::logic_error("arrayFromMat: unsupported image type");
   }

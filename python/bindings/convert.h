@@ -55,7 +55,7 @@ cv::Mat matFromArray(const py::array& array, const std::string& name, int cv_dep
 // Python arguments that set the same thing ("--delta" -> "delta", "--set" -> "Config.set").
 std::string pythonWording(const std::string& message);
 
-// An HxW or HxWxC array owning a copy of `mat` (CV_8U, CV_16U or CV_32F).
+// An HxW or HxWxC array owning a copy of `mat` (CV_8U, CV_16U, CV_32S or CV_32F).
 py::array arrayFromMat(const cv::Mat& mat);
 
 // 4x4 float64 from a pose, and back (BadArgument naming `name` unless a finite rigid transform).

@@ -191,6 +191,33 @@ py::dict timings(const PySystem& s) {
   return out;
 }
 
+// Result.clusters: the cluster log as columns (numpy arrays) and the label image.
+py::object clusterColumns(const ClusterLog& log) {
+  if (log.empty()) return py::none();
+  const size_t n = log.clusters.size();
+  py::array_t<int32_t> pixels(n);
+  py::array_t<bool> moving(n);
+  const std::pair<const char*, double ClusterRecord::*> reals[] = {
+      {"u_px", &ClusterRecord::u_px},   {"v_px", &ClusterRecord::v_px},     {"depth_m", &ClusterRecord::depth_m},
+      {"r_I", &ClusterRecord::r_I},     {"r_D_m", &ClusterRecord::r_D_m},   {"r_F_px", &ClusterRecord::r_F_px},
+      {"r_M_m", &ClusterRecord::r_M_m}, {"a_M", &ClusterRecord::a_M},       {"prior", &ClusterRecord::prior},
+      {"memory", &ClusterRecord::memory}, {"delta", &ClusterRecord::delta}, {"b", &ClusterRecord::b}};
+  py::dict out;
+  out["labels"] = arrayFromMat(log.labels);
+  for (size_t c = 0; c < n; ++c) {
+    pixels.mutable_at(c) = log.clusters[c].pixels;
+    moving.mutable_at(c) = log.clusters[c].moving;
+  }
+  out["pixels"] = pixels;
+  for (const auto& [name, member] : reals) {
+    py::array_t<double> column(n);
+    for (size_t c = 0; c < n; ++c) column.mutable_at(c) = log.clusters[c].*member;
+    out[name] = column;
+  }
+  out["moving"] = moving;
+  return out;
+}
+
 // ff.Result: what System.process returns.
 void bindResult(py::module_& m) {
   py::class_<FrameResult>(m, "Result", "What System.process returns for one frame.")
@@ -210,6 +237,11 @@ void bindResult(py::module_& m) {
             return arrayFromMat(r.scores);
           },
           "Dynamic score b per pixel at the segmentation level (float32), or None without segmentation.")
+      .def_property_readonly("clusters", [](const FrameResult& r) { return clusterColumns(r.clusters); },
+                             "With the setting pipeline.cluster_log: a dict of each cluster's evidence and score "
+                             "(numpy arrays indexed by cluster: pixels, u_px, v_px, depth_m, r_I, r_D_m, r_F_px, "
+                             "r_M_m, a_M, prior, memory, delta, b, moving; docs/formats.md) and 'labels', the "
+                             "cluster of each pixel at the segmentation level (int32, -1 = none); else None.")
       .def_readonly("tracking_ok", &FrameResult::tracking_ok, "False when the tracker lost the camera.")
       .def_readonly("has_pose", &FrameResult::has_pose,
                     "False before a System continuing in a saved map (map_in) is localized in it.")

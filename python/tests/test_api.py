@@ -55,6 +55,26 @@ def test_result_and_trajectory(synth_seq):
     assert set(system.timings()["median_ms"]) >= {"odometry", "flow"}
 
 
+def test_cluster_log_explains_the_scores(synth_seq):
+    seq = ff.TumSequence(synth_seq, frames="0:3")
+    cfg = ff.Config()
+    cfg.set("pipeline.cluster_log", True)
+    system = ff.System(seq.camera, cfg, T_world_first=seq.initial_pose())
+    results = [system.process(f.rgb, (f.depth * 5000).round().astype(np.uint16), f.timestamp) for f in seq]
+    assert results[0].clusters is None  # the first frame is not scored
+    c = results[-1].clusters
+    labels = c["labels"]
+    assert labels.shape == results[-1].scores.shape and labels.dtype == np.int32
+    n = len(c["b"])
+    assert n == labels.max() + 1 and all(len(c[k]) == n for k in ("pixels", "r_F_px", "delta", "moving"))
+    np.testing.assert_array_equal(np.bincount(labels[labels >= 0], minlength=n), c["pixels"])
+    # Each pixel's score is its cluster's.
+    inside = labels >= 0
+    np.testing.assert_allclose(results[-1].scores[inside], c["b"][labels[inside]], atol=1e-6)
+    plain = ff.System(seq.camera, ff.Config(), T_world_first=seq.initial_pose())
+    assert plain.process(seq[0].rgb, (seq[0].depth * 5000).round().astype(np.uint16), seq[0].timestamp).clusters is None
+
+
 def test_every_public_name_has_a_docstring():
     for name, obj in vars(ff).items():
         if name.startswith("_") or not (inspect.isclass(obj) or callable(obj)):

@@ -4,6 +4,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "flowfusion/eval/trajectory_metrics.h"
 #include "testing/test_util.h"
@@ -174,6 +177,48 @@ std::string writeGridPly(const std::filesystem::path& path, int lifted) {
   f << "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   for (int k = 0; k < 100; ++k) f << 0.01 * (k % 10) << " " << 0.01 * (k / 10) << " " << (k < lifted ? 0.1 : 0.0) << "\n";
   return path.string();
+}
+
+TEST(CmdEval, ClustersJoinsARunsClusterLogWithTheTrueMasks) {
+  namespace fs = std::filesystem;
+  ff::testing::TempDir dir;
+  const fs::path seq = dir.path() / "seq", out = dir.path() / "out", plain = dir.path() / "plain";
+  ASSERT_EQ(runFlowfusion("synth " + seq.string() + " --width 160 --height 120 --frames 12 --seed 5 --objects 2").status,
+            0);
+  ASSERT_EQ(runFlowfusion("run " + seq.string() + " --out " + out.string() + " --no-map --quiet --cluster-log").status,
+            0);
+  ASSERT_EQ(runFlowfusion("run " + seq.string() + " --out " + plain.string() + " --no-map --quiet").status, 0);
+  // Every frame after the first is scored and logged; the log changes nothing else.
+  int logs = 0;
+  for (const auto& e : fs::directory_iterator(out / "clusters")) logs += e.path().extension() == ".csv";
+  EXPECT_EQ(logs, 11);
+  EXPECT_FALSE(fs::exists(plain / "clusters"));
+  std::ifstream a(out / "trajectory.txt"), b(plain / "trajectory.txt");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+
+  const auto r = runFlowfusion("eval clusters " + (seq / "masks").string() + " " + (out / "clusters").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::istringstream lines(r.output);
+  std::string line;
+  std::getline(lines, line);
+  EXPECT_EQ(line, "frame,timestamp,cluster,pixels,u_px,v_px,depth_m,r_I,r_D_m,r_F_px,r_M_m,a_M,prior,memory,delta,b,"
+                  "moving,truth_share,verdict");
+  int hits = 0;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> f;
+    std::istringstream fields(line);
+    for (std::string v; std::getline(fields, v, ',');) f.push_back(v);
+    ASSERT_EQ(f.size(), 19u) << line;
+    const bool dynamic = std::stod(f[15]) > 0.5, mostly_true = std::stod(f[17]) >= 0.5;
+    const std::string verdict = mostly_true ? (dynamic ? "hit" : "missed") : (dynamic ? "false" : "static");
+    EXPECT_EQ(f[18], verdict) << line;
+    EXPECT_NE(f[18], "static") << "left out without --all";
+    hits += f[18] == "hit";
+  }
+  EXPECT_GT(hits, 0) << "the boxes' clusters found";
+  const auto none = runFlowfusion("eval clusters " + (seq / "masks").string() + " " + (out / "masks").string());
+  EXPECT_EQ(none.status, 2);
+  EXPECT_NE(none.output.find("no cluster log"), std::string::npos) << none.output;
 }
 
 TEST(CmdEval, MapReportsTheFractionOfPointsBeyondTheThreshold) {

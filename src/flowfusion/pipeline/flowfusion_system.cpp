@@ -137,6 +137,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   result.dynamic_mask = full_scores.empty() ? cv::Mat(frame.depth.size(), CV_8U, cv::Scalar(0))
                                             : dynamicMask(full_scores, config_.pipeline.mask_threshold);
   result.scores = scores;
+  result.clusters = std::move(tracked.clusters);
   // A frame whose tracking failed stays out of the map when loop closure can find it again.
   const bool fused =
       (result.tracking_ok || !slam_) && startFusion(frame, result.T_world_cam, full_scores, Clock::now() > deadline_);
@@ -201,7 +202,7 @@ FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, 
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
   velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
-  return {estimate.scores, estimate.map_agreement};
+  return {estimate.scores, estimate.map_agreement, std::move(estimate.cluster_log)};
 }
 
 MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,

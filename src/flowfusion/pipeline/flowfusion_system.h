@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "flowfusion/segmentation/cluster_log.h"
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/timings.h"
@@ -34,6 +35,7 @@ struct FrameResult {
   int iterations = 0;           // segmentation rounds
   cv::Mat dynamic_mask;         // CV_8U, input size, 255 = dynamic, in this frame's pixels
   cv::Mat scores;               // CV_32F b per pixel at the segmentation level (empty when off)
+  ClusterLog clusters;          // each cluster's evidence and score (pipeline.cluster_log; else empty)
 };
 
 // A run continuing in a saved map (`run --map-in`): where it came from and when the run found
@@ -116,6 +118,7 @@ class FlowFusionSystem {
   struct TrackedScores {
     cv::Mat scores;
     cv::Mat map_agreement;
+    ClusterLog clusters;
   };
   // Odometry and segmentation against the target.
   TrackedScores track(const RgbdFrame& frame, const OdometryFrame& cur, FrameResult& result);

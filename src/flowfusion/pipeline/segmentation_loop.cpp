@@ -323,6 +323,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     estimate.T_target_cur = again.T_target_source;
     if (done) break;
   }
+  if (opt.cluster_log) estimate.cluster_log = clusterLog(graph, res, scores);
   const SE3 T_world_scored = in.target.T_world_target * estimate.T_target_cur;
   memory_.remember(graph, scores, seg_frame.depth, T_world_scored, in.frame.timestamp);
   past_views_.add(seg_frame.depth, estimate.scores, T_world_scored, in.frame.timestamp);

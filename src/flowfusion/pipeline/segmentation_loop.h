@@ -17,6 +17,7 @@
 #include "flowfusion/flow/flow_motion.h"
 #include "flowfusion/flow/optical_flow.h"
 #include "flowfusion/pipeline/tracking_target.h"
+#include "flowfusion/segmentation/cluster_log.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/motion_memory.h"
 #include "flowfusion/segmentation/past_views.h"
@@ -34,7 +35,8 @@ struct MotionEstimate {
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
   bool restarted_from_flow = false;
-  int rounds = 0;            // score <-> odometry rounds run
+  int rounds = 0;
+  ClusterLog cluster_log;  // the last round's per-cluster evidence (pipeline.cluster_log); else empty            // score <-> odometry rounds run
 };
 
 struct SegmentationInput {

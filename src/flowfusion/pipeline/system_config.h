@@ -52,6 +52,9 @@ struct PipelineOptions {
   // Share of the image (0: keep all): a dynamic region smaller than it that touches no image border
   // is written as static (dropSmallInteriorRegions: a static cluster's own residual on real frames).
   double mask_min_region = 0.02;
+  // Keep each scored frame's per-cluster evidence (FrameResult::clusters; `run --cluster-log`
+  // writes it): why a region is marked or not. One row per cluster.
+  bool cluster_log = false;
   // The first odometry of a frame is weighted by the previous frame's scores carried over, so a
   // moving object seen before does not pull it (false: the paper's unweighted Eq. 1).
   bool carry_scores = true;
@@ -76,7 +79,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyfr
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
-                                                mask_map_agreement, mask_min_region, carry_scores,
+                                                mask_map_agreement, mask_min_region, cluster_log, carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
                                                 model_min_valid_fraction, budget_ms)
 

@@ -32,11 +32,7 @@ struct ClusterDeltas {
 };
 
 ClusterDeltas clusterDeltas(const ClusterGraph& graph, const ResidualImages& residuals, const ScoreConfig& config) {
-  const ClusterMeans r_I = clusterMeans(graph, residuals.r_I, "r_I");
-  const ClusterMeans r_D = clusterMeans(graph, residuals.r_D, "r_D");
-  const ClusterMeans r_F = clusterMeans(graph, residuals.r_F, "r_F");
-  const ClusterMeans r_M = clusterMeans(graph, residuals.r_M, "r_M");
-  const ClusterMeans a_M = clusterMeans(graph, residuals.a_M, "a_M");
+  const auto [r_I, r_D, r_F, r_M, a_M] = residualMeans(graph, residuals);
   const ClusterMeans on_mover = clusterMeans(graph, residuals.on_target_mover, "on_target_mover");
   MotionTerms terms = motionTerms(graph, r_I, r_D, r_F, config);
   ClusterDeltas d{std::move(terms.delta), std::move(terms.flow), modelOcclusionTerm(graph, r_M, config), {}};
@@ -55,6 +51,12 @@ ClusterDeltas clusterDeltas(const ClusterGraph& graph, const ResidualImages& res
 }
 
 }  // namespace
+
+ResidualMeans residualMeans(const ClusterGraph& graph, const ResidualImages& residuals) {
+  return {clusterMeans(graph, residuals.r_I, "r_I"), clusterMeans(graph, residuals.r_D, "r_D"),
+          clusterMeans(graph, residuals.r_F, "r_F"), clusterMeans(graph, residuals.r_M, "r_M"),
+          clusterMeans(graph, residuals.a_M, "a_M")};
+}
 
 double scoreTarget(double delta, double theta_b, double theta_t) {
   return std::clamp((delta - theta_b) / (theta_t - theta_b), 0.0, 1.0);

@@ -26,6 +26,12 @@ struct ResidualImages {
                             // (PixelResiduals::on_target_mover; ScoreConfig::target_mover_share)
 };
 
+// The cluster means of the images behind Eq. 10 and the map's terms (clusterMeans).
+struct ResidualMeans {
+  ClusterMeans r_I, r_D, r_F, r_M, a_M;
+};
+ResidualMeans residualMeans(const ClusterGraph& graph, const ResidualImages& residuals);
+
 struct DynamicScores {
   std::vector<float> delta;  // Eq. 10 per cluster (with the model term where it was kept); NaN where
                              // the cluster had no valid residual

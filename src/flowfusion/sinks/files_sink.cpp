@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include <opencv2/imgproc.hpp>
+
 #include "flowfusion/core/atomic_file.h"
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
@@ -129,11 +131,14 @@ void FilesSink::begin(const RunInfo& info) {
   writeJsonFile((out / "config.json").string(), nlohmann::json(info.config));
   if (options_.write_masks) fs::create_directories(out / "masks");
   if (options_.write_overlays) fs::create_directories(out / "overlays");
-  if (options_.write_masks || options_.write_overlays) writer_ = std::make_unique<ImageWriter>(kWaitingImages);
+  if (options_.write_clusters) fs::create_directories(out / "clusters");
+  if (options_.write_masks || options_.write_overlays || options_.write_clusters)
+    writer_ = std::make_unique<ImageWriter>(kWaitingImages);
 }
 
 void FilesSink::frame(const RgbdFrame& frame, const FrameResult& result) {
   writeMask(frame.timestamp, result.dynamic_mask);
+  writeClusters(frame.timestamp, result.clusters, result.dynamic_mask.size());
   // Copies: the caller may change its images once frame() returns.
   if (writer_ && options_.write_overlays)
     writer_->push([path = (fs::path(options_.out_dir) / "overlays" / (timestampName(frame.timestamp) + ".png")).string(),
@@ -147,6 +152,20 @@ void FilesSink::writeMask(double timestamp, const cv::Mat& dynamic_mask) {
   writer_->push([path = (fs::path(options_.out_dir) / "masks" / (timestampName(timestamp) + ".png")).string(),
                  mask = dynamic_mask.clone(), source = source_] {
     writePngAtomic(path, inRawPixels(source, mask), "mask");
+  });
+}
+
+void FilesSink::writeClusters(double timestamp, const ClusterLog& log, const cv::Size& image_size) {
+  if (!writer_ || !options_.write_clusters || log.empty()) return;
+  // Labels + 1 (0: no cluster) in 16 bits, at the input's size.
+  cv::Mat labels16, full;
+  log.labels.convertTo(labels16, CV_16U, 1.0, 1.0);
+  cv::resize(labels16, full, image_size, 0, 0, cv::INTER_NEAREST);
+  const fs::path base = fs::path(options_.out_dir) / "clusters" / timestampName(timestamp);
+  writer_->push([csv_path = base.string() + ".csv", png_path = base.string() + ".png", csv = clusterLogCsv(log),
+                 labels = std::move(full), source = source_] {
+    writeFileAtomic(csv_path, csv, "cluster log");
+    writePngAtomic(png_path, inRawPixels(source, labels), "cluster labels");
   });
 }
 
@@ -207,6 +226,7 @@ void FilesSink::end(RunSummary& summary, const StaticMap* map) {
   summary.written.push_back((out / "timings.csv").string());
   if (options_.write_masks) summary.written.push_back((out / "masks").string() + "/");
   if (options_.write_overlays) summary.written.push_back((out / "overlays").string() + "/");
+  if (options_.write_clusters) summary.written.push_back((out / "clusters").string() + "/");
   if (map && options_.export_map) exportMap(summary, *map);
   writeSummary(summary);
   if (image_error) std::rethrow_exception(image_error);

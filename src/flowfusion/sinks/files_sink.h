@@ -1,6 +1,6 @@
 #pragma once
 // The result sink that writes a run's files into one output folder (what `flowfusion run`
-// leaves): config.json at the start, masks/ and overlays/ per frame, then trajectory.txt,
+// leaves): config.json at the start, masks/, overlays/ and clusters/ per frame, then trajectory.txt,
 // timings.csv, the map (map.ply, map_points.ply, preview/, and map.ffmap for a next run's --map-in:
 // slam/map_file.h) and summary.json. Every file is
 // written atomically; summary.json says whether the run is complete and, if not, why.
@@ -24,6 +24,9 @@ struct FilesSinkOptions {
   bool overwrite = false;       // allow a non-empty out_dir
   bool write_masks = true;      // masks/<timestamp>.png, 255 = dynamic, in the source's raw pixels
   bool write_overlays = false;  // overlays/<timestamp>.png: mask over colour, for looking
+  // clusters/<timestamp>.csv and .png: each cluster's evidence and score (FrameResult::clusters,
+  // pipeline.cluster_log) and the clusters' labels in the source's raw pixels (docs/formats.md)
+  bool write_clusters = false;
   bool export_map = true;       // map.ply, map_points.ply, preview/*.png, map.ffmap
 };
 
@@ -41,6 +44,9 @@ class FilesSink : public ResultSink {
   // masks/<timestamp>.png as frame() writes it, for a result kept without its frame (the Python
   // System's save()); `dynamic_mask` in the system's pixels, taken back by the source's toRawPixels.
   void writeMask(double timestamp, const cv::Mat& dynamic_mask);
+  // clusters/<timestamp>.csv and .png when write_clusters and the result carries a cluster log;
+  // `image_size`: the system's input size, which the labels are brought to.
+  void writeClusters(double timestamp, const ClusterLog& log, const cv::Size& image_size);
 
  private:
   class ImageWriter;
