@@ -70,6 +70,7 @@ Row runOurs(const TumSequence& seq, const std::string& label, const std::string&
   o.out_dir = (out_root / label / method).string();
   o.overwrite = true;
   o.export_map = config.pipeline.fusion;
+  o.write_clusters = config.pipeline.cluster_log;
   FilesSink files(o);
   const auto start = std::chrono::steady_clock::now();
   TumFolderSource source(seq, c.system.frames.empty() ? FrameRange{} : parseFrameRange(c.system.frames));

@@ -79,6 +79,7 @@ py::dict run(const std::filesystem::path& sequence, const std::filesystem::path&
     files.out_dir = out_dir.string();
     files.overwrite = overwrite;
     files.export_map = export_map;
+    files.write_clusters = c.pipeline.cluster_log;  // as `flowfusion run --set pipeline.cluster_log=true`
     FilesSink sink(files);
     const std::unique_ptr<FrameSource> source = openFrameSource(sequence.string(), options, range);
     std::optional<SavedMap> map;  // read and checked before anything is written, as `run --map-in`

@@ -55,7 +55,7 @@ def test_result_and_trajectory(synth_seq):
     assert set(system.timings()["median_ms"]) >= {"odometry", "flow"}
 
 
-def test_cluster_log_explains_the_scores(synth_seq):
+def test_cluster_log_explains_the_scores(synth_seq, tmp_path):
     seq = ff.TumSequence(synth_seq, frames="0:3")
     cfg = ff.Config()
     cfg.set("pipeline.cluster_log", True)
@@ -71,6 +71,9 @@ def test_cluster_log_explains_the_scores(synth_seq):
     # Each pixel's score is its cluster's.
     inside = labels >= 0
     np.testing.assert_allclose(results[-1].scores[inside], c["b"][labels[inside]], atol=1e-6)
+    written = ff.run(synth_seq, tmp_path / "run", config=cfg, frames="0:3", export_map=False)["written"]
+    assert any(w.endswith("clusters/") for w in written)
+    assert len(list((tmp_path / "run" / "clusters").glob("*.csv"))) == 3  # as `flowfusion run --cluster-log`
     plain = ff.System(seq.camera, ff.Config(), T_world_first=seq.initial_pose())
     assert plain.process(seq[0].rgb, (seq[0].depth * 5000).round().astype(np.uint16), seq[0].timestamp).clusters is None
 
