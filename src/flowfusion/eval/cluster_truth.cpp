@@ -21,22 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMaxStampDiffS = 0.02;
-
-// The files `dir`/<timestamp><extension>, by time.
-std::vector<std::pair<double, std::string>> stampedFiles(const std::string& dir, const std::string& extension) {
-  std::vector<std::pair<double, std::string>> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (!e.is_regular_file() || e.path().extension() != extension) continue;
-    const std::string stem = e.path().stem().string();
-    char* end = nullptr;
-    const double t = std::strtod(stem.c_str(), &end);
-    if (!stem.empty() && end && *end == '\0') files.emplace_back(t, e.path().string());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
 // Per label value of the 16-bit label image (cluster + 1): pixels, and pixels the truth marks.
 struct LabelCounts {
   std::vector<int> pixels, truth;
@@ -122,7 +106,7 @@ ClusterTruth clusterTruth(const std::string& gt_dir, const std::string& clusters
   for (const auto& [t, p] : logs) log_t.push_back(t);
   for (const auto& [t, p] : masks) mask_t.push_back(t);
   ClusterTruth out;
-  for (const auto& [i, j] : associateStamps(log_t, mask_t, kMaxStampDiffS)) {
+  for (const auto& [i, j] : associateStamps(log_t, mask_t, kMaxMaskStampDiffS)) {
     const std::string labels_path = fs::path(logs[i].second).replace_extension(".png").string();
     if (!fs::exists(labels_path)) throw InputError(labels_path + ": the cluster log's label image is missing");
     const cv::Mat labels = readImageFile(labels_path, cv::IMREAD_UNCHANGED, "cluster labels");

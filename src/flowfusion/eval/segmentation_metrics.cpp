@@ -19,8 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMaxStampDiffS = 0.02;
-
 double ratioOrOne(int64_t num, int64_t den) { return den == 0 ? 1.0 : static_cast<double>(num) / den; }
 
 struct MaskFiles {
@@ -31,20 +29,29 @@ struct MaskFiles {
 MaskFiles listMasks(const std::string& dir) {
   if (!fs::is_directory(dir)) throw InputError(dir + ": mask folder does not exist");
   MaskFiles m;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (!e.is_regular_file() || e.path().extension() != ".png") continue;
-    const std::string stem = e.path().stem().string();
-    char* end = nullptr;
-    const double t = std::strtod(stem.c_str(), &end);
-    if (!stem.empty() && end && *end == '\0') m.stamped.emplace_back(t, e.path().string());
-    else m.named[stem] = e.path().string();
-  }
+  m.stamped = stampedFiles(dir, ".png", &m.named);
   if (m.stamped.empty() && m.named.empty()) throw InputError(dir + ": no .png masks in this folder");
-  std::sort(m.stamped.begin(), m.stamped.end());
   return m;
 }
 
 }  // namespace
+
+std::vector<std::pair<double, std::string>> stampedFiles(const std::string& dir, const std::string& extension,
+                                                         std::map<std::string, std::string>* named) {
+  std::vector<std::pair<double, std::string>> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file() || e.path().extension() != extension) continue;
+    const std::string stem = e.path().stem().string();
+    char* end = nullptr;
+    const double t = std::strtod(stem.c_str(), &end);
+    if (!stem.empty() && end && *end == '\0')
+      files.emplace_back(t, e.path().string());
+    else if (named)
+      (*named)[stem] = e.path().string();
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
 
 cv::Mat readMaskFile(const std::string& path) {
   const cv::Mat raw = readImageFile(path, cv::IMREAD_UNCHANGED, "mask image");
@@ -97,7 +104,7 @@ SegmentationResult evaluateSegmentation(const std::string& gt_dir, const std::st
   std::vector<double> gt_t, est_t;
   for (const auto& [t, p] : gt.stamped) gt_t.push_back(t);
   for (const auto& [t, p] : est.stamped) est_t.push_back(t);
-  for (const auto& [i, j] : associateStamps(gt_t, est_t, kMaxStampDiffS))
+  for (const auto& [i, j] : associateStamps(gt_t, est_t, kMaxMaskStampDiffS))
     pairs.push_back({gt.stamped[i].second, est.stamped[j].second, gt_t[i], {}});
   std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
   const double no_stamp = std::numeric_limits<double>::quiet_NaN();

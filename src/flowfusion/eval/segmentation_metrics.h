@@ -2,9 +2,11 @@
 // Dynamic-object segmentation metrics: estimated masks against ground-truth masks.
 // Masks are 8-bit images, dynamic where the value is above 127 (written as 255), static elsewhere.
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ff::eval {
@@ -69,6 +71,14 @@ struct SegmentationResult {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SegmentationResult, frames, gt_unmatched, est_unmatched, mean_iou,
                                    mean_precision, mean_recall, pooled, iou_loss, per_frame)
+
+// Masks (and a run's per-frame files) are matched by the timestamps in their names within this, s.
+constexpr double kMaxMaskStampDiffS = 0.02;
+
+// The regular files `dir`/<timestamp><extension> by time; with `named`, the others with that
+// extension too (stem -> path). The folder must exist.
+std::vector<std::pair<double, std::string>> stampedFiles(const std::string& dir, const std::string& extension,
+                                                         std::map<std::string, std::string>* named = nullptr);
 
 // Folders of <timestamp>.png masks. Files are matched by the timestamp in their names (nearest
 // within 0.02 s, each used once, as associate.py); names that are not numbers match by identical

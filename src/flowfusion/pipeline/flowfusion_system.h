@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "flowfusion/segmentation/cluster_log.h"
 #include "flowfusion/core/camera.h"
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/timings.h"
@@ -18,6 +17,7 @@
 #include "flowfusion/pipeline/segmentation_loop.h"
 #include "flowfusion/pipeline/system_config.h"
 #include "flowfusion/pipeline/tracking_target.h"
+#include "flowfusion/segmentation/cluster_log.h"
 #include "flowfusion/slam/loop_closer.h"
 #include "flowfusion/slam/map_file.h"
 

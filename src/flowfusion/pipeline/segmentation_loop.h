@@ -35,8 +35,8 @@ struct MotionEstimate {
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
   bool restarted_from_flow = false;
-  int rounds = 0;
-  ClusterLog cluster_log;  // the last round's per-cluster evidence (pipeline.cluster_log); else empty            // score <-> odometry rounds run
+  int rounds = 0;            // score <-> odometry rounds run
+  ClusterLog cluster_log;    // the last round's per-cluster evidence (pipeline.cluster_log); else empty
 };
 
 struct SegmentationInput {
