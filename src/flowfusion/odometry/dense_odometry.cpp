@@ -34,6 +34,8 @@ void validate(const OdometryConfig& c) {
   require(within(c.depth_sigma_a, 0, 10) && c.depth_sigma_b >= 0 && c.depth_sigma_b <= 10,
           "depth_sigma_a must be in (0, 10] m and depth_sigma_b in [0, 10] 1/m");
   require(c.depth_slope_sigma >= 0 && c.depth_slope_sigma <= 100, "depth_slope_sigma must be in [0, 100] px");
+  require(c.depth_offset_sigma_per_rad >= 0 && c.depth_offset_sigma_per_rad <= 1e3,
+          "depth_offset_sigma_per_rad must be in [0, 1000] (1/m per radian; 0 turns the offset off)");
   require(within(c.min_depth, 0, 100) && within(c.max_depth, c.min_depth, 1000),
           "min_depth must be positive and below max_depth (metres)");
   require(within(c.convergence_eps, 0, 1), "convergence_eps must be in (0, 1]");
@@ -82,6 +84,9 @@ inline float bilinearDepth(const FloatImage& d, int x0, int y0, float ax, float 
   return (1 - ay) * ((1 - ax) * a + ax * b) + ay * ((1 - ax) * c + ax * e);
 }
 
+// A target depth z (m, 0 = none) whose inverse depth is moved by `offset` (1/m): 1 / (1/z + offset).
+inline float withOffset(float z, float offset) { return z / (1 + offset * z); }
+
 // A target level's images and pixel weights (empty: none) as FloatImages.
 struct TargetImages {
   FloatImage depth, intensity, grad_x, grad_y, dgrad_x, dgrad_y, weight;
@@ -105,6 +110,9 @@ inline float fastLog1p(float q) {
   return 0.69314718f * e + 2.0f * s * (1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7))));
 }
 
+// Parameters of the normal equations: the pose's twist (6) and the target's inverse-depth offset.
+constexpr int kParams = 7;
+constexpr int kHessian = kParams * (kParams + 1) / 2;  // upper triangle
 constexpr int kLanes = 8;  // partial sums per dot product: whole SIMD registers, so the loops vectorise
 
 // sum_t a[t] b[t] over n (a multiple of kLanes) terms, in kLanes partial sums (a fixed order).
@@ -126,22 +134,22 @@ class RowTerms {
     for (auto& col : cols_) col.reset(new float[(max_terms + kLanes - 1) / kLanes * kLanes]);
   }
   // A term whose J and r are final.
-  void add(const float J[6], float r, float v) { add(J, r, v, 1.0f, 0.0f); }
+  void add(const float J[kParams], float r, float v) { add(J, r, v, 1.0f, 0.0f); }
   // A depth term whose J and r are still to be divided by sqrt(s2) + sqrt(g2) * slope_sigma
   // (s2: the sum of the two depths' squared sigmas, g2: the squared depth gradient; the final
   // terms above pass 1 and 0, a division by exactly 1).
-  void add(const float J[6], float r, float v, float s2, float g2) {
-    for (int k = 0; k < 6; ++k) cols_[k][n_] = J[k];
+  void add(const float J[kParams], float r, float v, float s2, float g2) {
+    for (int k = 0; k < kParams; ++k) cols_[k][n_] = J[k];
     cols_[kR][n_] = r;
     cols_[kV][n_] = v;
     cols_[kS2][n_] = s2;
     cols_[kG2][n_] = g2;
     ++n_;
   }
-  // Adds the upper triangle of J^T W J (21, row by row) and J^T W r (6) with the Cauchy weights
+  // Adds the upper triangle of J^T W J (kHessian, row by row) and J^T W r (kParams) with the Cauchy weights
   // w = v / (1 + q), q = r^2 / c^2, summed in float, to H and g, and returns sum v log(1 + q);
   // starts the next row.
-  float sumInto(std::array<double, 21>& H, std::array<double, 6>& g) {
+  float sumInto(std::array<double, kHessian>& H, std::array<double, kParams>& g) {
     scaleDepthTerms();
     const int n = (n_ + kLanes - 1) / kLanes * kLanes;
     for (auto& col : cols_) std::fill(col.get() + n_, col.get() + n, 0.0f);
@@ -153,10 +161,10 @@ class RowTerms {
     const float cost = lanesDot(v, wJ, n);
     for (int t = 0; t < n; ++t) w[t] = v[t] / (1 + q[t]);
     int k = 0;
-    for (int i = 0; i < 6; ++i) {
+    for (int i = 0; i < kParams; ++i) {
       const float* Ji = cols_[i].get();
       for (int t = 0; t < n; ++t) wJ[t] = w[t] * Ji[t];
-      for (int j = i; j < 6; ++j) H[k++] += lanesDot(wJ, cols_[j].get(), n);
+      for (int j = i; j < kParams; ++j) H[k++] += lanesDot(wJ, cols_[j].get(), n);
       g[i] += lanesDot(wJ, cols_[kR].get(), n);
     }
     n_ = 0;
@@ -170,7 +178,7 @@ class RowTerms {
     const float* g2 = cols_[kG2].get();
     float* inv_s = cols_[kW].get();
     for (int t = 0; t < n_; ++t) inv_s[t] = 1.0f / (std::sqrt(s2[t]) + std::sqrt(g2[t]) * slope_sigma_);
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < kParams; ++k) {
       float* J = cols_[k].get();
       for (int t = 0; t < n_; ++t) J[t] *= inv_s[t];
     }
@@ -182,9 +190,9 @@ class RowTerms {
     }
   }
 
-  // Columns after J0..J5; kW and kWJ: scratch.
-  static constexpr int kR = 6, kV = 7, kQ = 8, kW = 9, kWJ = 10, kS2 = 11, kG2 = 12;
-  std::array<std::unique_ptr<float[]>, 13> cols_;
+  // Columns after J0..J6; kW and kWJ: scratch.
+  static constexpr int kR = kParams, kV = kR + 1, kQ = kR + 2, kW = kR + 3, kWJ = kR + 4, kS2 = kR + 5, kG2 = kR + 6;
+  std::array<std::unique_ptr<float[]>, kG2 + 1> cols_;
   int n_ = 0;
   float inv_c2_, slope_sigma_;
 };
@@ -193,22 +201,22 @@ class RowTerms {
 // float within one image row and carried over in double, which keeps the inner loop cheap
 // without losing precision over hundreds of thousands of pixels.
 struct Accumulator {
-  std::array<double, 21> H{};
-  std::array<double, 6> g{};
+  std::array<double, kHessian> H{};
+  std::array<double, kParams> g{};
   double cost = 0;
   int count = 0;
 
   void merge(const Accumulator& o) {
-    for (int i = 0; i < 21; ++i) H[i] += o.H[i];
-    for (int i = 0; i < 6; ++i) g[i] += o.g[i];
+    for (int i = 0; i < kHessian; ++i) H[i] += o.H[i];
+    for (int i = 0; i < kParams; ++i) g[i] += o.g[i];
     cost += o.cost;
     count += o.count;
   }
-  Matrix6d hessian() const {
-    Matrix6d m;
+  Eigen::Matrix<double, kParams, kParams> hessian() const {
+    Eigen::Matrix<double, kParams, kParams> m;
     int k = 0;
-    for (int i = 0; i < 6; ++i)
-      for (int j = i; j < 6; ++j) m(i, j) = m(j, i) = H[k++];
+    for (int i = 0; i < kParams; ++i)
+      for (int j = i; j < kParams; ++j) m(i, j) = m(j, i) = H[k++];
     return m;
   }
 };
@@ -308,7 +316,7 @@ inline bool hiddenInTarget(float zB, float qz, float ratio) { return ratio > 0 &
 
 // d(image value at the warped pixel)/d(xi) for a left perturbation q' = q + dv + dw x q, from the
 // image's gradient (gx, gy) per pixel: the chain rule through the projection, written out.
-inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy, float J[6]) {
+inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy, float J[kParams]) {
   const float ga = gx * fx, gb = gy * fy;
   const float X = w.qx * w.iz, Y = w.qy * w.iz;
   J[0] = ga * w.iz;
@@ -317,6 +325,7 @@ inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy,
   J[3] = -(ga * X * Y + gb * (1 + Y * Y));
   J[4] = ga * (1 + X * X) + gb * X * Y;
   J[5] = gb * X - ga * Y;
+  J[6] = 0;
 }
 
 // One level's settings and images, in the float form the per-pixel loop uses.
@@ -331,9 +340,10 @@ struct LevelTerms {
   float sigma_a, sigma_b, slope_sigma;
   float zmin, zmax, occlusion;
   bool use_intensity, use_depth;
+  float depth_offset;  // 1/m, added to the target's inverse depths
 
   LevelTerms(const PyramidLevel& A_, const PyramidLevel& B_, const cv::Mat& wimg_, const cv::Mat& wB_, const SE3& T,
-             const OdometryConfig& c)
+             const OdometryConfig& c, double depth_offset_)
       : A(A_), B(B_, wB_), wimg(wimg_), R(T.rotation().cast<float>()), t(T.translation().cast<float>()),
         fx(static_cast<float>(A_.camera.fx)), fy(static_cast<float>(A_.camera.fy)),
         inv_c2(static_cast<float>(1.0 / (c.cauchy_c * c.cauchy_c))),
@@ -341,7 +351,8 @@ struct LevelTerms {
         sI(static_cast<float>(c.alpha_I / c.sigma_I)), sigma_a(static_cast<float>(c.depth_sigma_a)),
         sigma_b(static_cast<float>(c.depth_sigma_b)), slope_sigma(static_cast<float>(c.depth_slope_sigma)),
         zmin(static_cast<float>(c.min_depth)), zmax(static_cast<float>(c.max_depth)),
-        occlusion(static_cast<float>(c.occlusion_ratio)), use_intensity(c.use_intensity), use_depth(c.use_depth) {}
+        occlusion(static_cast<float>(c.occlusion_ratio)), use_intensity(c.use_intensity), use_depth(c.use_depth),
+        depth_offset(static_cast<float>(depth_offset_)) {}
 
   float depthSigma(float z) const {
     const float dz = z - 0.4f;
@@ -361,10 +372,10 @@ struct LevelTerms {
       const Warp w = rw.at(x);
       v_pix *= targetWeight(B.weight, w);
       if (v_pix <= 0) continue;
-      const float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+      const float zB = withOffset(bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay), depth_offset);
       if (hiddenInTarget(zB, w.qz, occlusion)) continue;
       bool used = false;
-      float J[6];
+      float J[kParams];
       if (use_intensity) {
         const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
         imageJacobian(bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI, bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI,
@@ -381,6 +392,7 @@ struct LevelTerms {
         J[2] -= 1;
         J[3] -= w.qy;
         J[4] += w.qx;
+        J[6] = -zB * zB;  // d(zB)/d(offset)
         terms.add(J, zB - w.qz, v_pix, sA * sA + sB * sB, gx * gx + gy * gy);
         used = true;
       }
@@ -392,11 +404,17 @@ struct LevelTerms {
 
 constexpr int kStripes = 16;  // fixed so that sums, and results, do not depend on the thread count
 
-// The normal equations of one Gauss-Newton iteration at one level under T (target <- source),
+// What the Gauss-Newton iterations estimate: the pose and the target's inverse-depth offset.
+struct OdometryState {
+  SE3 T_target_source;
+  double depth_offset = 0;  // 1/m, added to the target's inverse depths
+};
+
+// The normal equations of one Gauss-Newton iteration at one level in `state`,
 // summed over fixed row stripes so that the result does not depend on the thread count.
 Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
-                            const SE3& T, const OdometryConfig& c) {
-  const LevelTerms level(A, B, wimg, wB, T, c);
+                            const OdometryState& state, const OdometryConfig& c) {
+  const LevelTerms level(A, B, wimg, wB, state.T_target_source, c, state.depth_offset);
   std::array<Accumulator, kStripes> acc{};
   const int rows = A.depth.rows;
   cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
@@ -416,9 +434,47 @@ Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const 
 
 DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { validate(config_); }
 
+namespace {
+
+// One Gauss-Newton step from the normal equations of a level. With offset_information > 0 (the
+// prior's weight pulling the depth offset towards 0) the offset is solved with the pose and
+// eliminated from the pose's system (Schur complement), else it stays where it is and the pose's
+// system is the plain 6x6 one. Returns false when that system is not positive definite or the step
+// not finite.
+struct OdometryStep {
+  Vector6d pose = Vector6d::Zero();  // twist applied on the left
+  double offset = 0;                 // 1/m
+  Matrix6d H_pose;                   // the pose's information with the offset marginalised
+};
+bool solveStep(const Accumulator& total, double depth_offset, double offset_information, OdometryStep& step) {
+  const Eigen::Matrix<double, kParams, kParams> H = total.hessian();
+  const Eigen::Map<const Eigen::Matrix<double, kParams, 1>> g(total.g.data());
+  step.H_pose = H.topLeftCorner<6, 6>();
+  Vector6d g_pose = g.head<6>();
+  double h_oo = 0, g_o = 0;
+  if (offset_information > 0) {
+    h_oo = H(6, 6) + offset_information;
+    g_o = g[6] + offset_information * depth_offset;
+    step.H_pose -= H.topRightCorner<6, 1>() * H.bottomLeftCorner<1, 6>() / h_oo;
+    g_pose -= H.topRightCorner<6, 1>() * (g_o / h_oo);
+  }
+  const Eigen::LDLT<Matrix6d> ldlt(step.H_pose);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  step.pose = ldlt.solve(-g_pose);
+  step.offset = offset_information > 0 ? -(g_o + H.bottomLeftCorner<1, 6>().dot(step.pose)) / h_oo : 0;
+  return step.pose.allFinite() && std::isfinite(step.offset);
+}
+
+}  // namespace
+
+double DenseOdometry::offsetInformationPerPixel(const SE3& T_init) const {
+  const double sigma = config_.depth_offset_sigma_per_rad * std::abs(logSE3(T_init)[4]);
+  return sigma > 0 ? 1.0 / (sigma * sigma) : 0.0;
+}
+
 OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const OdometryFrame& target, const SE3& T_init,
                                        const cv::Mat& source_weights, const cv::Mat& target_weights,
-                                       int coarsest_level) const {
+                                       int coarsest_level, double target_depth_offset_init) const {
   const OdometryConfig& c = config_;
   OdometryResult result;
   result.T_target_source = T_init;
@@ -426,7 +482,8 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
     result.message = "frames were prepared with fewer pyramid levels than configured";
     return result;
   }
-  SE3 T = T_init;
+  const double offset_information_per_pixel = c.use_depth ? offsetInformationPerPixel(T_init) : 0.0;
+  OdometryState state{T_init, offset_information_per_pixel > 0 ? target_depth_offset_init : 0.0};
   Matrix6d H_last = Matrix6d::Zero();
 
   const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
@@ -436,14 +493,11 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
     const cv::Mat wimg = weightsAtLevel(source_weights, A.depth.size());
     const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
     double prev_cost = std::numeric_limits<double>::infinity();
-    SE3 T_before_step = T;
+    OdometryState before_step = state;
 
     const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
     for (int it = 0; it < iterations; ++it) {
-      const Accumulator total = accumulateLevel(A, B, wimg, wB, T, c);
-      const Matrix6d H = total.hessian();
-      Vector6d g;
-      for (int i = 0; i < 6; ++i) g[i] = total.g[i];
+      const Accumulator total = accumulateLevel(A, B, wimg, wB, state, c);
       ++result.iterations;
       if (level == c.finest_level) {
         result.valid_pixels = total.count;
@@ -453,21 +507,26 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
       const double cost = total.cost / total.count;
       // A rise in cost means the last step overshot: take it back and refine on the next level.
       if (cost > prev_cost * 1.0001) {
-        T = T_before_step;
+        state = before_step;
         break;
       }
       prev_cost = cost;
-      H_last = H;
-      const Eigen::LDLT<Matrix6d> ldlt(H);
-      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
-      const Vector6d delta = ldlt.solve(-g);
-      if (!delta.allFinite()) break;
-      T_before_step = T;
-      T = expSE3(delta) * T;
-      if (delta.norm() < c.convergence_eps) break;
+      OdometryStep step;
+      const bool solved = solveStep(total, state.depth_offset, offset_information_per_pixel * total.count, step);
+      H_last = step.H_pose;
+      if (!solved) break;
+      before_step = state;
+      state.T_target_source = expSE3(step.pose) * state.T_target_source;
+      state.depth_offset += step.offset;
+      if (step.pose.norm() < c.convergence_eps) break;
     }
   }
+  return finish(result, state.T_target_source, state.depth_offset, H_last, source, T_init);
+}
 
+OdometryResult DenseOdometry::finish(OdometryResult result, const SE3& T, double depth_offset, const Matrix6d& H_last,
+                                     const OdometryFrame& source, const SE3& T_init) const {
+  const OdometryConfig& c = config_;
   result.hessian = H_last;
   const int level_pixels = source.level(c.finest_level).depth.rows * source.level(c.finest_level).depth.cols;
   const auto fail = [&](const std::string& why) {
@@ -488,6 +547,7 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
                 std::to_string(rotationAngleDeg(T)) + " deg in one frame)");
   result.ok = true;
   result.T_target_source = T;
+  result.target_depth_offset = depth_offset;
   result.message = "ok";
   return result;
 }
@@ -534,7 +594,8 @@ int depthOffsetPx(const SE3& T_prev_cur, double dt_s, double fx_px, double depth
 
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& c,
-                                     const cv::Mat& target_weights, int mover_margin_px, int depth_window_px) {
+                                     const cv::Mat& target_weights, int mover_margin_px, int depth_window_px,
+                                     double target_depth_offset) {
   const PyramidLevel& A = source.level(level);
   const PyramidLevel& B = target.level(level);
   cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
@@ -557,6 +618,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
   const Eigen::Vector3f t = T_target_source.translation().cast<float>();
   const float zmin = static_cast<float>(c.min_depth), zmax = static_cast<float>(c.max_depth);
   const float occlusion = static_cast<float>(c.occlusion_ratio);
+  const float offset = static_cast<float>(target_depth_offset);
   const int cols = A.depth.cols;
   const cv::Mat target_depth_or_inf = depth_window_px > 0 ? depthOrInfinity(B.depth) : cv::Mat();
   cv::parallel_for_(cv::Range(0, A.depth.rows), [&](const cv::Range& range) {
@@ -570,7 +632,7 @@ PixelResiduals computePixelResiduals(const OdometryFrame& source, const Odometry
       for (int x = 0; x < cols; ++x) {
         if (!warps.ok[x]) continue;
         const Warp w = warps.at(x);
-        const float zB = bilinearDepth(target_images.depth, w.x0, w.y0, w.ax, w.ay);
+        const float zB = withOffset(bilinearDepth(target_images.depth, w.x0, w.y0, w.ax, w.ay), offset);
         if (hiddenInTarget(zB, w.qz, occlusion)) continue;
         if (targetWeight(target_images.weight, w) < 0.5f) {
           oM[x] = 1.f;

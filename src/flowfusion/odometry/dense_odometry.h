@@ -11,7 +11,9 @@
 // C(e) = c^2/2 log(1 + (e/c)^2). v(x) in [0, 1] is an optional weight of each source pixel
 // (FlowFusion Eq. 16 passes 1 - b) and w_T one of each target pixel (a moving object in the
 // target must not attract the background it covered). sigma_D grows with range (Kinect noise model, Nguyen et al. 2012) and with
-// the local depth slope, so that depth edges and far surfaces count less.
+// the local depth slope, so that depth edges and far surfaces count less. Optionally, under yaw,
+// D_T is taken with an inverse-depth offset estimated alongside (1 / (1/D_T + offset):
+// structured-light depth drifts as the camera turns; OdometryConfig::depth_offset_sigma_per_rad).
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -49,13 +51,23 @@ struct OdometryConfig {
   double min_valid_fraction = 0.05;  // of the finest level's pixels that must take part
   double max_translation = 0.3;      // m per frame; more is taken as divergence
   double max_rotation_deg = 30.0;    // deg per frame; more is taken as divergence
+  // Structured-light depth (Kinect v1, TUM fr1) drifts as the camera yaws: on fr1_rpy consecutive
+  // frames' inverse depths differ by about 0.025 1/m per radian of yaw, uniformly over the image
+  // (a disparity offset, docs/tuning.md#depth_offset_sigma_per_rad), which a 6-DoF fit takes as a
+  // forward translation and a shorter yaw. With this > 0 the target's inverse depths get an
+  // unknown offset (1/m), estimated with the pose under a zero-mean prior whose standard deviation
+  // per valid pixel is this times the yaw of the initial guess (radians). 0.5 halves the drift of
+  // fast-yawing Kinect v1 recordings (fr1_rpy_head150 33.5 -> 16.7 mm) but doubles it on synthetic
+  // turning scenes whose depth does not drift (loop closure test 17.7 -> 37 mm), so it is off by
+  // default: turn it on for structured-light depth under fast rotation. 0: the 6-DoF fit.
+  double depth_offset_sigma_per_rad = 0;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OdometryConfig, levels, finest_level, max_iterations,
                                                 max_iterations_finest, alpha_I,
                                                 sigma_I, cauchy_c, use_intensity, use_depth, depth_sigma_a,
                                                 depth_sigma_b, depth_slope_sigma, min_depth, max_depth,
                                                 convergence_eps, occlusion_ratio, min_valid_fraction, max_translation,
-                                                max_rotation_deg)
+                                                max_rotation_deg, depth_offset_sigma_per_rad)
 // Throws InputError naming the setting when a value is out of range.
 void validate(const OdometryConfig& config);
 
@@ -74,7 +86,8 @@ struct OdometryResult {
   SE3 T_target_source = SE3::Identity();  // source-camera points to target-camera points
   int valid_pixels = 0;                   // pixels used at the finest level in the last iteration
   int iterations = 0;                     // Gauss-Newton iterations, all levels
-  double final_cost = 0;                  // mean robust cost per valid pixel at the finest level
+  double final_cost = 0;
+  double target_depth_offset = 0;         // 1/m added to the target's inverse depths (see OdometryConfig)                  // mean robust cost per valid pixel at the finest level
   Matrix6d hessian = Matrix6d::Zero();    // Gauss-Newton normal matrix at the solution
 };
 
@@ -84,13 +97,22 @@ class DenseOdometry {
   // Estimates T_target_source. The weights (optional, CV_32F in [0, 1], any size: resized to each
   // level) scale each source pixel's terms and each target pixel's pull. `coarsest_level` (-1:
   // levels - 1) is where the coarse-to-fine descent starts; a re-estimate from a close guess needs
-  // only the fine levels. Never returns NaN: failures have ok = false and the initial guess.
+  // only the fine levels, and starts the depth offset at target_depth_offset_init (a previous
+  // estimate's; used only where the guess yaws). Never returns NaN: failures have ok = false and
+  // the initial guess.
   OdometryResult estimate(const OdometryFrame& source, const OdometryFrame& target,
                           const SE3& T_target_source_init = SE3::Identity(), const cv::Mat& source_weights = {},
-                          const cv::Mat& target_weights = {}, int coarsest_level = -1) const;
+                          const cv::Mat& target_weights = {}, int coarsest_level = -1,
+                          double target_depth_offset_init = 0) const;
   const OdometryConfig& config() const { return config_; }
 
  private:
+  // The depth offset prior's weight per valid pixel for a fit starting at T_init (0: none).
+  double offsetInformationPerPixel(const SE3& T_init) const;
+  // The failure checks on a converged fit, and the result.
+  OdometryResult finish(OdometryResult result, const SE3& T, double depth_offset, const Matrix6d& H_last,
+                        const OdometryFrame& source, const SE3& T_init) const;
+
   OdometryConfig config_;
 };
 
@@ -103,7 +125,8 @@ class DenseOdometry {
 // target's valid depths within that many pixels (at `level`) of where the pixel lands: a depth
 // image out of step with its colour image (taken up to 20 ms apart, rolling shutter) puts a thin
 // structure's depth edge a few pixels away under fast rotation, where the plain residual compares
-// it with the background behind it.
+// it with the background behind it. target_depth_offset (1/m) is added to the target's inverse
+// depths, as the odometry estimated it (OdometryResult::target_depth_offset).
 struct PixelResiduals {
   cv::Mat abs_intensity;    // CV_32F
   cv::Mat abs_depth;        // CV_32F
@@ -119,6 +142,6 @@ int depthOffsetPx(const SE3& T_prev_cur, double dt_s, double fx_px, double depth
 PixelResiduals computePixelResiduals(const OdometryFrame& source, const OdometryFrame& target,
                                      const SE3& T_target_source, int level, const OdometryConfig& config,
                                      const cv::Mat& target_weights = {}, int mover_margin_px = 0,
-                                     int depth_window_px = 0);
+                                     int depth_window_px = 0, double target_depth_offset = 0);
 
 }  // namespace ff

@@ -221,7 +221,10 @@ MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, Trackin
     e.odometry = odometry_.estimate(cur, *target.odo, e.T_target_cur, weights, *target.weights);
   }
   result.used_model = target.from_model;
-  if (e.odometry.ok) e.T_target_cur = e.odometry.T_target_source;
+  if (e.odometry.ok) {
+    e.T_target_cur = e.odometry.T_target_source;
+    e.target_depth_offset = e.odometry.target_depth_offset;
+  }
   e.scores = carried;
   return e;
 }

@@ -186,6 +186,7 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   if (!again.ok) return;
   estimate.odometry = again;
   estimate.T_target_cur = again.T_target_source;
+  estimate.target_depth_offset = again.target_depth_offset;
   estimate.scores = mover;
   estimate.restarted_from_flow = true;
 }
@@ -300,7 +301,8 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
                                                 config_.scores.depth_window_px);
       const PixelResiduals pr = computePixelResiduals(in.cur, *in.target.odo, estimate.T_target_cur, level,
                                                       config_.odometry, *in.target.weights,
-                                                      config_.scores.target_mover_margin_px, depth_window_px);
+                                                      config_.scores.target_mover_margin_px, depth_window_px,
+                                                      estimate.target_depth_offset);
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
@@ -316,11 +318,13 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     StageTimer timer(timings, "odometry");
     const OdometryResult again =
         refine_odometry_.estimate(in.cur, *in.target.odo, estimate.T_target_cur, staticWeights(estimate.scores),
-                                  *in.target.weights, opt.refine_coarsest_level);
+                                  *in.target.weights, opt.refine_coarsest_level,
+                                  estimate.target_depth_offset);
     estimate.rounds = round + 1;
     if (!again.ok) break;
     const bool done = converged(estimate.T_target_cur, again.T_target_source, opt);
     estimate.T_target_cur = again.T_target_source;
+    estimate.target_depth_offset = again.target_depth_offset;
     if (done) break;
   }
   if (opt.cluster_log) estimate.cluster_log = clusterLog(graph, res, scores);

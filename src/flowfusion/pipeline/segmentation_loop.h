@@ -28,6 +28,7 @@ namespace ff {
 struct MotionEstimate {
   OdometryResult odometry;   // the last successful full estimate (or the failed first one)
   SE3 T_target_cur;          // current-camera points into the target camera
+  double target_depth_offset = 0;  // 1/m, the target's inverse-depth offset estimated with T_target_cur
   cv::Mat scores;            // b per pixel at the segmentation level; empty when none
   // 255 where the pixel coincides with the stable static map (modelAgreement) at the segmentation
   // level; empty without a map or a scored frame

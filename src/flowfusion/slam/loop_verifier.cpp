@@ -46,7 +46,8 @@ LoopCheck verifyLoop(const KeyframeImages& query, const KeyframeImages& candidat
     check.reason = "the loop moves the keyframe beyond slam.max_correction_m / max_correction_deg";
     return check;
   }
-  const PixelResiduals residuals = computePixelResiduals(source, target, r.T_target_source, 0, at_level, target_weight);
+  const PixelResiduals residuals =
+      computePixelResiduals(source, target, r.T_target_source, 0, at_level, target_weight, 0, 0, r.target_depth_offset);
   check.inlier_fraction = inlierFraction(residuals, source.level(0).depth, source_weight, config);
   if (check.inlier_fraction < config.min_inlier_fraction) {
     check.reason = "inlier fraction " + std::to_string(check.inlier_fraction) + " below slam.min_inlier_fraction";
