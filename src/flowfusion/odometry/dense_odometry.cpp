@@ -110,9 +110,11 @@ inline float fastLog1p(float q) {
   return 0.69314718f * e + 2.0f * s * (1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7))));
 }
 
-// Parameters of the normal equations: the pose's twist (6) and the target's inverse-depth offset.
-constexpr int kParams = 7;
-constexpr int kHessian = kParams * (kParams + 1) / 2;  // upper triangle
+// Parameters of the normal equations: the pose's twist (6), and with the depth offset estimated
+// (OdometryConfig::depth_offset_sigma_per_rad) the target's inverse-depth offset as a seventh. The
+// per-row sums are instantiated for both: the seventh column costs about 9 % of the odometry.
+constexpr int kPoseParams = 6, kOffsetParams = 7;
+constexpr int hessianSize(int params) { return params * (params + 1) / 2; }  // upper triangle
 constexpr int kLanes = 8;  // partial sums per dot product: whole SIMD registers, so the loops vectorise
 
 // sum_t a[t] b[t] over n (a multiple of kLanes) terms, in kLanes partial sums (a fixed order).
@@ -123,9 +125,10 @@ inline float lanesDot(const float* a, const float* b, int n) {
   return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
 }
 
-// The Gauss-Newton terms of one image row, kept column by column (Jacobian J0..J5, residual r,
+// The Gauss-Newton terms of one image row, kept column by column (Jacobian J0..J(P-1), residual r,
 // pixel weight v), so that the residuals' scales, the IRLS weights, the Cauchy cost and the normal
 // equations are computed in loops the compiler vectorises, instead of 27 scalar updates per term.
+template <int P>
 class RowTerms {
  public:
   RowTerms(int max_terms, float inv_c2, float slope_sigma) : inv_c2_(inv_c2), slope_sigma_(slope_sigma) {
@@ -134,22 +137,22 @@ class RowTerms {
     for (auto& col : cols_) col.reset(new float[(max_terms + kLanes - 1) / kLanes * kLanes]);
   }
   // A term whose J and r are final.
-  void add(const float J[kParams], float r, float v) { add(J, r, v, 1.0f, 0.0f); }
+  void add(const float J[P], float r, float v) { add(J, r, v, 1.0f, 0.0f); }
   // A depth term whose J and r are still to be divided by sqrt(s2) + sqrt(g2) * slope_sigma
   // (s2: the sum of the two depths' squared sigmas, g2: the squared depth gradient; the final
   // terms above pass 1 and 0, a division by exactly 1).
-  void add(const float J[kParams], float r, float v, float s2, float g2) {
-    for (int k = 0; k < kParams; ++k) cols_[k][n_] = J[k];
+  void add(const float J[P], float r, float v, float s2, float g2) {
+    for (int k = 0; k < P; ++k) cols_[k][n_] = J[k];
     cols_[kR][n_] = r;
     cols_[kV][n_] = v;
     cols_[kS2][n_] = s2;
     cols_[kG2][n_] = g2;
     ++n_;
   }
-  // Adds the upper triangle of J^T W J (kHessian, row by row) and J^T W r (kParams) with the Cauchy weights
+  // Adds the upper triangle of J^T W J (row by row) and J^T W r with the Cauchy weights
   // w = v / (1 + q), q = r^2 / c^2, summed in float, to H and g, and returns sum v log(1 + q);
   // starts the next row.
-  float sumInto(std::array<double, kHessian>& H, std::array<double, kParams>& g) {
+  float sumInto(std::array<double, hessianSize(P)>& H, std::array<double, P>& g) {
     scaleDepthTerms();
     const int n = (n_ + kLanes - 1) / kLanes * kLanes;
     for (auto& col : cols_) std::fill(col.get() + n_, col.get() + n, 0.0f);
@@ -161,10 +164,10 @@ class RowTerms {
     const float cost = lanesDot(v, wJ, n);
     for (int t = 0; t < n; ++t) w[t] = v[t] / (1 + q[t]);
     int k = 0;
-    for (int i = 0; i < kParams; ++i) {
+    for (int i = 0; i < P; ++i) {
       const float* Ji = cols_[i].get();
       for (int t = 0; t < n; ++t) wJ[t] = w[t] * Ji[t];
-      for (int j = i; j < kParams; ++j) H[k++] += lanesDot(wJ, cols_[j].get(), n);
+      for (int j = i; j < P; ++j) H[k++] += lanesDot(wJ, cols_[j].get(), n);
       g[i] += lanesDot(wJ, cols_[kR].get(), n);
     }
     n_ = 0;
@@ -178,7 +181,7 @@ class RowTerms {
     const float* g2 = cols_[kG2].get();
     float* inv_s = cols_[kW].get();
     for (int t = 0; t < n_; ++t) inv_s[t] = 1.0f / (std::sqrt(s2[t]) + std::sqrt(g2[t]) * slope_sigma_);
-    for (int k = 0; k < kParams; ++k) {
+    for (int k = 0; k < P; ++k) {
       float* J = cols_[k].get();
       for (int t = 0; t < n_; ++t) J[t] *= inv_s[t];
     }
@@ -190,8 +193,8 @@ class RowTerms {
     }
   }
 
-  // Columns after J0..J6; kW and kWJ: scratch.
-  static constexpr int kR = kParams, kV = kR + 1, kQ = kR + 2, kW = kR + 3, kWJ = kR + 4, kS2 = kR + 5, kG2 = kR + 6;
+  // Columns after the Jacobian's; kW and kWJ: scratch.
+  static constexpr int kR = P, kV = kR + 1, kQ = kR + 2, kW = kR + 3, kWJ = kR + 4, kS2 = kR + 5, kG2 = kR + 6;
   std::array<std::unique_ptr<float[]>, kG2 + 1> cols_;
   int n_ = 0;
   float inv_c2_, slope_sigma_;
@@ -200,23 +203,24 @@ class RowTerms {
 // Normal equations (upper triangle of J^T W J, J^T W r), cost and count. Terms are summed in
 // float within one image row and carried over in double, which keeps the inner loop cheap
 // without losing precision over hundreds of thousands of pixels.
+template <int P>
 struct Accumulator {
-  std::array<double, kHessian> H{};
-  std::array<double, kParams> g{};
+  std::array<double, hessianSize(P)> H{};
+  std::array<double, P> g{};
   double cost = 0;
   int count = 0;
 
   void merge(const Accumulator& o) {
-    for (int i = 0; i < kHessian; ++i) H[i] += o.H[i];
-    for (int i = 0; i < kParams; ++i) g[i] += o.g[i];
+    for (int i = 0; i < hessianSize(P); ++i) H[i] += o.H[i];
+    for (int i = 0; i < P; ++i) g[i] += o.g[i];
     cost += o.cost;
     count += o.count;
   }
-  Eigen::Matrix<double, kParams, kParams> hessian() const {
-    Eigen::Matrix<double, kParams, kParams> m;
+  Eigen::Matrix<double, P, P> hessian() const {
+    Eigen::Matrix<double, P, P> m;
     int k = 0;
-    for (int i = 0; i < kParams; ++i)
-      for (int j = i; j < kParams; ++j) m(i, j) = m(j, i) = H[k++];
+    for (int i = 0; i < P; ++i)
+      for (int j = i; j < P; ++j) m(i, j) = m(j, i) = H[k++];
     return m;
   }
 };
@@ -316,7 +320,7 @@ inline bool hiddenInTarget(float zB, float qz, float ratio) { return ratio > 0 &
 
 // d(image value at the warped pixel)/d(xi) for a left perturbation q' = q + dv + dw x q, from the
 // image's gradient (gx, gy) per pixel: the chain rule through the projection, written out.
-inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy, float J[kParams]) {
+inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy, float J[kPoseParams]) {
   const float ga = gx * fx, gb = gy * fy;
   const float X = w.qx * w.iz, Y = w.qy * w.iz;
   J[0] = ga * w.iz;
@@ -325,7 +329,6 @@ inline void imageJacobian(float gx, float gy, const Warp& w, float fx, float fy,
   J[3] = -(ga * X * Y + gb * (1 + Y * Y));
   J[4] = ga * (1 + X * X) + gb * X * Y;
   J[5] = gb * X - ga * Y;
-  J[6] = 0;
 }
 
 // One level's settings and images, in the float form the per-pixel loop uses.
@@ -360,7 +363,8 @@ struct LevelTerms {
   }
 
   // The terms of row y: intensity and depth of every source pixel that warps into the target.
-  void row(int y, RowWarp& rw, RowTerms& terms, Accumulator& a) const {
+  template <int P>
+  void row(int y, RowWarp& rw, RowTerms<P>& terms, Accumulator<P>& a) const {
     const float* iA = A.intensity.ptr<float>(y);
     const float* wr = wimg.data ? wimg.row(y) : nullptr;
     const int cols = A.depth.cols;
@@ -372,14 +376,16 @@ struct LevelTerms {
       const Warp w = rw.at(x);
       v_pix *= targetWeight(B.weight, w);
       if (v_pix <= 0) continue;
-      const float zB = withOffset(bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay), depth_offset);
+      float zB = bilinearDepth(B.depth, w.x0, w.y0, w.ax, w.ay);
+      if constexpr (P == kOffsetParams) zB = withOffset(zB, depth_offset);
       if (hiddenInTarget(zB, w.qz, occlusion)) continue;
       bool used = false;
-      float J[kParams];
+      float J[P];
       if (use_intensity) {
         const float r = (bilinear(B.intensity, w.x0, w.y0, w.ax, w.ay) - iA[x]) * sI;
         imageJacobian(bilinear(B.grad_x, w.x0, w.y0, w.ax, w.ay) * sI, bilinear(B.grad_y, w.x0, w.y0, w.ax, w.ay) * sI,
                       w, fx, fy, J);
+        if constexpr (P == kOffsetParams) J[6] = 0;
         terms.add(J, r, v_pix);
         used = true;
       }
@@ -392,7 +398,7 @@ struct LevelTerms {
         J[2] -= 1;
         J[3] -= w.qy;
         J[4] += w.qx;
-        J[6] = -zB * zB;  // d(zB)/d(offset)
+        if constexpr (P == kOffsetParams) J[6] = -zB * zB;  // d(zB)/d(offset)
         terms.add(J, zB - w.qz, v_pix, sA * sA + sB * sB, gx * gx + gy * gy);
         used = true;
       }
@@ -412,20 +418,21 @@ struct OdometryState {
 
 // The normal equations of one Gauss-Newton iteration at one level in `state`,
 // summed over fixed row stripes so that the result does not depend on the thread count.
-Accumulator accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
-                            const OdometryState& state, const OdometryConfig& c) {
+template <int P>
+Accumulator<P> accumulateLevel(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
+                               const OdometryState& state, const OdometryConfig& c) {
   const LevelTerms level(A, B, wimg, wB, state.T_target_source, c, state.depth_offset);
-  std::array<Accumulator, kStripes> acc{};
+  std::array<Accumulator<P>, kStripes> acc{};
   const int rows = A.depth.rows;
   cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-    RowTerms terms(2 * A.depth.cols, level.inv_c2, level.slope_sigma);
+    RowTerms<P> terms(2 * A.depth.cols, level.inv_c2, level.slope_sigma);
     RowWarp warps(A.depth.cols);
     for (int s = range.start; s < range.end; ++s) {
       const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
       for (int y = std::max(y_begin, 1); y < std::min(y_end, rows - 1); ++y) level.row(y, warps, terms, acc[s]);
     }
   });
-  Accumulator total;
+  Accumulator<P> total;
   for (const auto& a : acc) total.merge(a);
   return total;
 }
@@ -436,33 +443,51 @@ DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { v
 
 namespace {
 
-// One Gauss-Newton step from the normal equations of a level. With offset_information > 0 (the
-// prior's weight pulling the depth offset towards 0) the offset is solved with the pose and
-// eliminated from the pose's system (Schur complement), else it stays where it is and the pose's
-// system is the plain 6x6 one. Returns false when that system is not positive definite or the step
-// not finite.
+// One Gauss-Newton step from the normal equations of a level: the pose's (6 parameters), or (7)
+// the pose's and the depth offset's, the offset pulled towards 0 by offset_information (the
+// prior's weight) and eliminated from the pose's system (Schur complement). Returns false when that
+// system is not positive definite or the step not finite.
 struct OdometryStep {
   Vector6d pose = Vector6d::Zero();  // twist applied on the left
   double offset = 0;                 // 1/m
-  Matrix6d H_pose;                   // the pose's information with the offset marginalised
+  Matrix6d H_pose;                   // the pose's information (with the offset marginalised)
 };
-bool solveStep(const Accumulator& total, double depth_offset, double offset_information, OdometryStep& step) {
-  const Eigen::Matrix<double, kParams, kParams> H = total.hessian();
-  const Eigen::Map<const Eigen::Matrix<double, kParams, 1>> g(total.g.data());
-  step.H_pose = H.topLeftCorner<6, 6>();
-  Vector6d g_pose = g.head<6>();
+template <int P>
+bool solveStep(const Accumulator<P>& total, double depth_offset, double offset_information, OdometryStep& step) {
+  const Eigen::Matrix<double, P, P> H = total.hessian();
+  const Eigen::Map<const Eigen::Matrix<double, P, 1>> g(total.g.data());
+  step.H_pose = H.template topLeftCorner<6, 6>();
+  Vector6d g_pose = g.template head<6>();
   double h_oo = 0, g_o = 0;
-  if (offset_information > 0) {
+  if constexpr (P == kOffsetParams) {
     h_oo = H(6, 6) + offset_information;
     g_o = g[6] + offset_information * depth_offset;
-    step.H_pose -= H.topRightCorner<6, 1>() * H.bottomLeftCorner<1, 6>() / h_oo;
-    g_pose -= H.topRightCorner<6, 1>() * (g_o / h_oo);
+    step.H_pose -= H.template topRightCorner<6, 1>() * H.template bottomLeftCorner<1, 6>() / h_oo;
+    g_pose -= H.template topRightCorner<6, 1>() * (g_o / h_oo);
   }
   const Eigen::LDLT<Matrix6d> ldlt(step.H_pose);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
   step.pose = ldlt.solve(-g_pose);
-  step.offset = offset_information > 0 ? -(g_o + H.bottomLeftCorner<1, 6>().dot(step.pose)) / h_oo : 0;
+  if constexpr (P == kOffsetParams) step.offset = -(g_o + H.template bottomLeftCorner<1, 6>().dot(step.pose)) / h_oo;
   return step.pose.allFinite() && std::isfinite(step.offset);
+}
+
+// One Gauss-Newton iteration's sums at a level (valid pixels, mean robust cost) and the step they
+// give, with P parameters (see solveStep); solved only where at least 12 pixels take part.
+struct LevelStep {
+  int count = 0;
+  double cost = 0;
+  bool solved = false;
+  OdometryStep step;
+};
+template <int P>
+LevelStep levelStep(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat& wimg, const cv::Mat& wB,
+                    const OdometryState& state, const OdometryConfig& c, double offset_information_per_pixel) {
+  const Accumulator<P> total = accumulateLevel<P>(A, B, wimg, wB, state, c);
+  LevelStep s{total.count, total.count ? total.cost / total.count : 0.0, false, {}};
+  if (total.count >= 12)
+    s.solved = solveStep(total, state.depth_offset, offset_information_per_pixel * total.count, s.step);
+  return s;
 }
 
 }  // namespace
@@ -483,7 +508,8 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
     return result;
   }
   const double offset_information_per_pixel = c.use_depth ? offsetInformationPerPixel(T_init) : 0.0;
-  OdometryState state{T_init, offset_information_per_pixel > 0 ? target_depth_offset_init : 0.0};
+  const bool with_offset = offset_information_per_pixel > 0;
+  OdometryState state{T_init, with_offset ? target_depth_offset_init : 0.0};
   Matrix6d H_last = Matrix6d::Zero();
 
   const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
@@ -497,24 +523,24 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
 
     const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
     for (int it = 0; it < iterations; ++it) {
-      const Accumulator total = accumulateLevel(A, B, wimg, wB, state, c);
+      const LevelStep s =
+          with_offset ? levelStep<kOffsetParams>(A, B, wimg, wB, state, c, offset_information_per_pixel)
+                      : levelStep<kPoseParams>(A, B, wimg, wB, state, c, 0.0);
       ++result.iterations;
       if (level == c.finest_level) {
-        result.valid_pixels = total.count;
-        result.final_cost = total.count ? total.cost / total.count : 0;
+        result.valid_pixels = s.count;
+        result.final_cost = s.cost;
       }
-      if (total.count < 12) break;
-      const double cost = total.cost / total.count;
+      if (s.count < 12) break;
       // A rise in cost means the last step overshot: take it back and refine on the next level.
-      if (cost > prev_cost * 1.0001) {
+      if (s.cost > prev_cost * 1.0001) {
         state = before_step;
         break;
       }
-      prev_cost = cost;
-      OdometryStep step;
-      const bool solved = solveStep(total, state.depth_offset, offset_information_per_pixel * total.count, step);
+      prev_cost = s.cost;
+      const OdometryStep& step = s.step;
       H_last = step.H_pose;
-      if (!solved) break;
+      if (!s.solved) break;
       before_step = state;
       state.T_target_source = expSE3(step.pose) * state.T_target_source;
       state.depth_offset += step.offset;

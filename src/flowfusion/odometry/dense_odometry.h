@@ -86,9 +86,10 @@ struct OdometryResult {
   SE3 T_target_source = SE3::Identity();  // source-camera points to target-camera points
   int valid_pixels = 0;                   // pixels used at the finest level in the last iteration
   int iterations = 0;                     // Gauss-Newton iterations, all levels
-  double final_cost = 0;
-  double target_depth_offset = 0;         // 1/m added to the target's inverse depths (see OdometryConfig)                  // mean robust cost per valid pixel at the finest level
-  Matrix6d hessian = Matrix6d::Zero();    // Gauss-Newton normal matrix at the solution
+  double final_cost = 0;                  // mean robust cost per valid pixel at the finest level
+  double target_depth_offset = 0;         // 1/m added to the target's inverse depths (see OdometryConfig)
+  Matrix6d hessian = Matrix6d::Zero();    // Gauss-Newton normal matrix of the pose at the solution (the
+                                          // depth offset, where estimated, marginalised)
 };
 
 class DenseOdometry {
