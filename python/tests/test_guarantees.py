@@ -108,11 +108,11 @@ def distorted_copy(synth_seq, tmp_path):
 
 def test_masks_come_back_in_the_pixels_of_the_image_given(app, synth_seq, tmp_path):
     root = distorted_copy(synth_seq, tmp_path)
-    run_app(app, "run", root, "--out", tmp_path / "cli", "--quiet", "--no-map", "--frames", "0:5")
+    run_app(app, "run", root, "--out", tmp_path / "cli", "--quiet", "--no-map", "--frames", "0:7")
     written = tmp_path / "cli" / "masks"
-    seq = ff.TumSequence(root, frames="0:5")
+    seq = ff.TumSequence(root, frames="0:7")
     assert seq.distortion is not None
-    raw_seq = ff.TumSequence(root, frames="0:5", undistort=False)
+    raw_seq = ff.TumSequence(root, frames="0:7", undistort=False)
     c = seq.camera
     distorted = ff.Camera(c.fx, c.fy, c.cx, c.cy, c.width, c.height, distortion=seq.distortion)
     by_frame = ff.System(c, T_world_first=seq.initial_pose())  # frames of the sequence

@@ -114,8 +114,14 @@ void expectFixedOnFr1Rpy(int first, int last, double fixed, double cause, void (
 
 TEST(RealFrames, SurfacesComingIntoViewOfStaticFr1RpyAreNotKeptDynamicByTheDepthAlone) {
   // Frames 82-107 (2.7-3.5 s): 3.4 % marked on average with any term starting the motion, 0.2 % now.
+  // (Shown with the 6-DoF odometry: with the depth offset estimated (odometry.depth_offset_sigma_per_rad)
+  // any term starting it marks 0.5 %: much of what the depth saw here was the sensor's drift.)
   expectFixedOnFr1Rpy(
-      82, 107, 0.01, 0.02, [](SystemConfig& c) { c.scores.model_motion_cue = ModelMotionCue::kAnyTerm; },
+      82, 107, 0.01, 0.02,
+      [](SystemConfig& c) {
+        c.scores.model_motion_cue = ModelMotionCue::kAnyTerm;
+        c.odometry.depth_offset_sigma_per_rad = 0;
+      },
       "the depth cues confirm each other");
 }
 
@@ -278,16 +284,19 @@ TEST(RealFrames, APersonFoundBeforeARestartFromTheFlowIsNotLost) {
   // fr1/rpy with a person walking at the right (augment seed 2901, rpy_people of docs/scenes.md):
   // in frames 1-6 the fast rotation misleads the first odometry and the flow's consensus restarts
   // it in four of them. With nothing carried after a restart, frame 6 loses the person, and the
-  // static scores carried from then on hold them lost: frames 7-15 mean IoU 0.05. Carried through
+  // static scores carried from then on hold them lost: frames 7-11 mean IoU 0.09. Carried through
   // the restarts where they said dynamic (scores.restart_keeps_movers), the previous scores keep
-  // the person: 0.94.
+  // the person: 0.97. (From frame 12 only a sliver of the person, without depth, shows at the top
+  // edge, its image motion close to the camera's (flow residual 0.3 px): nothing says it moves, and
+  // how long the carried score outlasts that follows small differences of the poses: to frame 15
+  // with a 6-DoF odometry, to frame 11 with the depth offset.)
   const testing::TempDir tmp;
   const auto augmented = withPeople("fr1_rpy_head150", 2901, 1, tmp);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   SystemConfig config;
-  EXPECT_GT(meanIoU(*augmented, config, 7, 15), 0.8) << "frames 7-15 with the movers carried";
+  EXPECT_GT(meanIoU(*augmented, config, 7, 11), 0.8) << "frames 7-11 with the movers carried";
   config.scores.restart_keeps_movers = false;
-  EXPECT_LT(meanIoU(*augmented, config, 7, 15), 0.3) << "the cause: nothing carried after a restart";
+  EXPECT_LT(meanIoU(*augmented, config, 7, 11), 0.3) << "the cause: nothing carried after a restart";
 }
 
 }  // namespace

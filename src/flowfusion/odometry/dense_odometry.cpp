@@ -36,6 +36,8 @@ void validate(const OdometryConfig& c) {
   require(c.depth_slope_sigma >= 0 && c.depth_slope_sigma <= 100, "depth_slope_sigma must be in [0, 100] px");
   require(c.depth_offset_sigma_per_rad >= 0 && c.depth_offset_sigma_per_rad <= 1e3,
           "depth_offset_sigma_per_rad must be in [0, 1000] (1/m per radian; 0 turns the offset off)");
+  require(c.depth_offset_dead_zone >= 0 && c.depth_offset_dead_zone <= 1,
+          "depth_offset_dead_zone must be in [0, 1] (1/m)");
   require(within(c.min_depth, 0, 100) && within(c.max_depth, c.min_depth, 1000),
           "min_depth must be positive and below max_depth (metres)");
   require(within(c.convergence_eps, 0, 1), "convergence_eps must be in (0, 1]");
@@ -451,15 +453,19 @@ struct OdometryStep {
   Vector6d pose = Vector6d::Zero();  // twist applied on the left
   double offset = 0;                 // 1/m
   Matrix6d H_pose;                   // the pose's information (with the offset marginalised)
+  Matrix6d H_pose_held;              // the pose's information with the offset held
+  Vector6d H_pose_offset = Vector6d::Zero();  // the pose's coupling to the offset
 };
 template <int P>
 bool solveStep(const Accumulator<P>& total, double depth_offset, double offset_information, OdometryStep& step) {
   const Eigen::Matrix<double, P, P> H = total.hessian();
   const Eigen::Map<const Eigen::Matrix<double, P, 1>> g(total.g.data());
   step.H_pose = H.template topLeftCorner<6, 6>();
+  step.H_pose_held = step.H_pose;
   Vector6d g_pose = g.template head<6>();
   double h_oo = 0, g_o = 0;
   if constexpr (P == kOffsetParams) {
+    step.H_pose_offset = H.template topRightCorner<6, 1>();
     h_oo = H(6, 6) + offset_information;
     g_o = g[6] + offset_information * depth_offset;
     step.H_pose -= H.template topRightCorner<6, 1>() * H.template bottomLeftCorner<1, 6>() / h_oo;
@@ -490,6 +496,59 @@ LevelStep levelStep(const PyramidLevel& A, const PyramidLevel& B, const cv::Mat&
   return s;
 }
 
+// The Gauss-Newton iterations at one pyramid level from `state`, with the depth offset estimated
+// (offset_information_per_pixel > 0) or held; counts them, and at the finest level records the valid
+// pixels and cost in `result` and the last step's normal equations in `last`.
+void iterateLevel(const OdometryConfig& c, const OdometryFrame& source, const OdometryFrame& target, int level,
+                  const cv::Mat& source_weights, const cv::Mat& target_weights, double offset_information_per_pixel,
+                  OdometryState& state, OdometryResult& result, OdometryStep& last) {
+  const PyramidLevel& A = source.level(level);
+  const PyramidLevel& B = target.level(level);
+  const cv::Mat wimg = weightsAtLevel(source_weights, A.depth.size());
+  const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
+  double prev_cost = std::numeric_limits<double>::infinity();
+  OdometryState before_step = state;
+  const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
+  for (int it = 0; it < iterations; ++it) {
+    const LevelStep s = offset_information_per_pixel > 0
+                            ? levelStep<kOffsetParams>(A, B, wimg, wB, state, c, offset_information_per_pixel)
+                            : levelStep<kPoseParams>(A, B, wimg, wB, state, c, 0.0);
+    ++result.iterations;
+    if (level == c.finest_level) {
+      result.valid_pixels = s.count;
+      result.final_cost = s.cost;
+    }
+    if (s.count < 12) break;
+    // A rise in cost means the last step overshot: take it back and refine on the next level.
+    if (s.cost > prev_cost * 1.0001) {
+      state = before_step;
+      break;
+    }
+    prev_cost = s.cost;
+    last = s.step;
+    if (!s.solved) break;
+    before_step = state;
+    state.T_target_source = expSE3(s.step.pose) * state.T_target_source;
+    state.depth_offset += s.step.offset;
+    if (s.step.pose.norm() < c.convergence_eps) break;
+  }
+}
+
+// Only the part of the offset beyond the dead zone is taken (a depth rendered from the map is off by
+// about 1e-4 1/m at range, which a free offset turns into forward motion); the pose moves to its
+// optimum with the offset held there, to first order from the last normal equations:
+// -H_pose_held^-1 H_pose_offset (held - estimated).
+void holdOffsetBeyondDeadZone(const OdometryConfig& c, const OdometryStep& last, OdometryState& state) {
+  const double held =
+      std::copysign(std::max(0.0, std::abs(state.depth_offset) - c.depth_offset_dead_zone), state.depth_offset);
+  const Eigen::LDLT<Matrix6d> ldlt(last.H_pose_held);
+  if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+    const Vector6d xi = ldlt.solve(-last.H_pose_offset * (held - state.depth_offset));
+    if (xi.allFinite()) state.T_target_source = expSE3(xi) * state.T_target_source;
+  }
+  state.depth_offset = held;
+}
+
 }  // namespace
 
 double DenseOdometry::offsetInformationPerPixel(const SE3& T_init) const {
@@ -508,46 +567,15 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
     return result;
   }
   const double offset_information_per_pixel = c.use_depth ? offsetInformationPerPixel(T_init) : 0.0;
-  const bool with_offset = offset_information_per_pixel > 0;
-  OdometryState state{T_init, with_offset ? target_depth_offset_init : 0.0};
-  Matrix6d H_last = Matrix6d::Zero();
-
+  OdometryState state{T_init, offset_information_per_pixel > 0 ? target_depth_offset_init : 0.0};
+  OdometryStep last;
+  last.H_pose = last.H_pose_held = Matrix6d::Zero();
   const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
-  for (int level = start_level; level >= c.finest_level; --level) {
-    const PyramidLevel& A = source.level(level);
-    const PyramidLevel& B = target.level(level);
-    const cv::Mat wimg = weightsAtLevel(source_weights, A.depth.size());
-    const cv::Mat wB = weightsAtLevel(target_weights, B.depth.size());
-    double prev_cost = std::numeric_limits<double>::infinity();
-    OdometryState before_step = state;
-
-    const int iterations = level == c.finest_level ? c.max_iterations_finest : c.max_iterations;
-    for (int it = 0; it < iterations; ++it) {
-      const LevelStep s =
-          with_offset ? levelStep<kOffsetParams>(A, B, wimg, wB, state, c, offset_information_per_pixel)
-                      : levelStep<kPoseParams>(A, B, wimg, wB, state, c, 0.0);
-      ++result.iterations;
-      if (level == c.finest_level) {
-        result.valid_pixels = s.count;
-        result.final_cost = s.cost;
-      }
-      if (s.count < 12) break;
-      // A rise in cost means the last step overshot: take it back and refine on the next level.
-      if (s.cost > prev_cost * 1.0001) {
-        state = before_step;
-        break;
-      }
-      prev_cost = s.cost;
-      const OdometryStep& step = s.step;
-      H_last = step.H_pose;
-      if (!s.solved) break;
-      before_step = state;
-      state.T_target_source = expSE3(step.pose) * state.T_target_source;
-      state.depth_offset += step.offset;
-      if (step.pose.norm() < c.convergence_eps) break;
-    }
-  }
-  return finish(result, state.T_target_source, state.depth_offset, H_last, source, T_init);
+  for (int level = start_level; level >= c.finest_level; --level)
+    iterateLevel(c, source, target, level, source_weights, target_weights, offset_information_per_pixel, state, result,
+                 last);
+  if (offset_information_per_pixel > 0 && c.depth_offset_dead_zone > 0) holdOffsetBeyondDeadZone(c, last, state);
+  return finish(result, state.T_target_source, state.depth_offset, last.H_pose, source, T_init);
 }
 
 OdometryResult DenseOdometry::finish(OdometryResult result, const SE3& T, double depth_offset, const Matrix6d& H_last,

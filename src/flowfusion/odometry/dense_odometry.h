@@ -11,7 +11,7 @@
 // C(e) = c^2/2 log(1 + (e/c)^2). v(x) in [0, 1] is an optional weight of each source pixel
 // (FlowFusion Eq. 16 passes 1 - b) and w_T one of each target pixel (a moving object in the
 // target must not attract the background it covered). sigma_D grows with range (Kinect noise model, Nguyen et al. 2012) and with
-// the local depth slope, so that depth edges and far surfaces count less. Optionally, under yaw,
+// the local depth slope, so that depth edges and far surfaces count less. Under yaw (by default),
 // D_T is taken with an inverse-depth offset estimated alongside (1 / (1/D_T + offset):
 // structured-light depth drifts as the camera turns; OdometryConfig::depth_offset_sigma_per_rad).
 #include <nlohmann/json.hpp>
@@ -56,18 +56,22 @@ struct OdometryConfig {
   // (a disparity offset, docs/tuning.md#depth_offset_sigma_per_rad), which a 6-DoF fit takes as a
   // forward translation and a shorter yaw. With this > 0 the target's inverse depths get an
   // unknown offset (1/m), estimated with the pose under a zero-mean prior whose standard deviation
-  // per valid pixel is this times the yaw of the initial guess (radians). 0.5 halves the drift of
-  // fast-yawing Kinect v1 recordings (fr1_rpy_head150 33.5 -> 16.7 mm) but doubles it on synthetic
-  // turning scenes whose depth does not drift (loop closure test 17.7 -> 37 mm), so it is off by
-  // default: turn it on for structured-light depth under fast rotation. 0: the 6-DoF fit.
-  double depth_offset_sigma_per_rad = 0;
+  // per valid pixel is this times the yaw of the initial guess (radians): free under fast yaw, held
+  // at 0 when the camera barely turns. 0.5 halves the drift of fast-yawing Kinect v1 recordings
+  // (fr1_rpy_head150 33.3 -> 15.8 mm without segmentation); 0: the 6-DoF fit.
+  double depth_offset_sigma_per_rad = 0.5;
+  // Only the part of the estimated offset beyond this (1/m) is taken, and the pose moved to its
+  // optimum with the offset held there (to first order): the depth rendered from the map differs
+  // from a frame's by about 1e-4 1/m at range, which a free offset turns into forward motion on
+  // every keyframe (docs/tuning.md#depth_offset_sigma_per_rad). 0: all of it.
+  double depth_offset_dead_zone = 0.0003;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OdometryConfig, levels, finest_level, max_iterations,
                                                 max_iterations_finest, alpha_I,
                                                 sigma_I, cauchy_c, use_intensity, use_depth, depth_sigma_a,
                                                 depth_sigma_b, depth_slope_sigma, min_depth, max_depth,
                                                 convergence_eps, occlusion_ratio, min_valid_fraction, max_translation,
-                                                max_rotation_deg, depth_offset_sigma_per_rad)
+                                                max_rotation_deg, depth_offset_sigma_per_rad, depth_offset_dead_zone)
 // Throws InputError naming the setting when a value is out of range.
 void validate(const OdometryConfig& config);
 
