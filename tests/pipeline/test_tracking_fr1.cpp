@@ -58,7 +58,7 @@ TEST(TrackingOnFr1Rpy, TheTargetsDepthOffsetUnderYawHalvesTheDrift) {
   const double plain = ateOn(sequence, six_dof);
   std::cout << "fr1_rpy_head150 ATE mm (no segmentation): with the depth offset " << 1e3 * offset << ", 6-DoF "
             << 1e3 * plain << "\n";
-  // Measured: 15.8 and 33.3 mm.
+  // Measured: 16.2 and 33.3 mm.
   EXPECT_LT(offset, 0.6 * plain);
   EXPECT_LT(offset, 0.02);
 }

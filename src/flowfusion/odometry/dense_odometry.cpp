@@ -445,17 +445,19 @@ DenseOdometry::DenseOdometry(const OdometryConfig& config) : config_(config) { v
 
 namespace {
 
+// A Gauss-Newton step and the normal equations it came from.
+struct OdometryStep {
+  Vector6d pose = Vector6d::Zero();  // twist applied on the left
+  double offset = 0;                 // 1/m
+  Matrix6d H_pose = Matrix6d::Zero();          // the pose's information (with the offset marginalised)
+  Matrix6d H_pose_held = Matrix6d::Zero();     // the pose's information with the offset held
+  Vector6d H_pose_offset = Vector6d::Zero();  // the pose's coupling to the offset
+};
+
 // One Gauss-Newton step from the normal equations of a level: the pose's (6 parameters), or (7)
 // the pose's and the depth offset's, the offset pulled towards 0 by offset_information (the
 // prior's weight) and eliminated from the pose's system (Schur complement). Returns false when that
 // system is not positive definite or the step not finite.
-struct OdometryStep {
-  Vector6d pose = Vector6d::Zero();  // twist applied on the left
-  double offset = 0;                 // 1/m
-  Matrix6d H_pose;                   // the pose's information (with the offset marginalised)
-  Matrix6d H_pose_held;              // the pose's information with the offset held
-  Vector6d H_pose_offset = Vector6d::Zero();  // the pose's coupling to the offset
-};
 template <int P>
 bool solveStep(const Accumulator<P>& total, double depth_offset, double offset_information, OdometryStep& step) {
   const Eigen::Matrix<double, P, P> H = total.hessian();
@@ -468,13 +470,13 @@ bool solveStep(const Accumulator<P>& total, double depth_offset, double offset_i
     step.H_pose_offset = H.template topRightCorner<6, 1>();
     h_oo = H(6, 6) + offset_information;
     g_o = g[6] + offset_information * depth_offset;
-    step.H_pose -= H.template topRightCorner<6, 1>() * H.template bottomLeftCorner<1, 6>() / h_oo;
-    g_pose -= H.template topRightCorner<6, 1>() * (g_o / h_oo);
+    step.H_pose -= step.H_pose_offset * step.H_pose_offset.transpose() / h_oo;
+    g_pose -= step.H_pose_offset * (g_o / h_oo);
   }
   const Eigen::LDLT<Matrix6d> ldlt(step.H_pose);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
   step.pose = ldlt.solve(-g_pose);
-  if constexpr (P == kOffsetParams) step.offset = -(g_o + H.template bottomLeftCorner<1, 6>().dot(step.pose)) / h_oo;
+  if constexpr (P == kOffsetParams) step.offset = -(g_o + step.H_pose_offset.dot(step.pose)) / h_oo;
   return step.pose.allFinite() && std::isfinite(step.offset);
 }
 
@@ -569,7 +571,6 @@ OdometryResult DenseOdometry::estimate(const OdometryFrame& source, const Odomet
   const double offset_information_per_pixel = c.use_depth ? offsetInformationPerPixel(T_init) : 0.0;
   OdometryState state{T_init, offset_information_per_pixel > 0 ? target_depth_offset_init : 0.0};
   OdometryStep last;
-  last.H_pose = last.H_pose_held = Matrix6d::Zero();
   const int start_level = coarsest_level < 0 ? c.levels - 1 : std::clamp(coarsest_level, c.finest_level, c.levels - 1);
   for (int level = start_level; level >= c.finest_level; --level)
     iterateLevel(c, source, target, level, source_weights, target_weights, offset_information_per_pixel, state, result,

@@ -58,7 +58,7 @@ struct OdometryConfig {
   // unknown offset (1/m), estimated with the pose under a zero-mean prior whose standard deviation
   // per valid pixel is this times the yaw of the initial guess (radians): free under fast yaw, held
   // at 0 when the camera barely turns. 0.5 halves the drift of fast-yawing Kinect v1 recordings
-  // (fr1_rpy_head150 33.3 -> 15.8 mm without segmentation); 0: the 6-DoF fit.
+  // (fr1_rpy_head150 33.3 -> 16.2 mm without segmentation); 0: the 6-DoF fit.
   double depth_offset_sigma_per_rad = 0.5;
   // Only the part of the estimated offset beyond this (1/m) is taken, and the pose moved to its
   // optimum with the offset held there (to first order): the depth rendered from the map differs
