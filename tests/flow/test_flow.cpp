@@ -164,6 +164,63 @@ TEST(FlowResidual, AnAffineErrorFieldIsTakenOutAndAMoverKeepsItsMotion) {
   EXPECT_THROW(flowResidualWithoutAffine(of, e, 0.0), InputError);
 }
 
+// A wall at 2 m with a near surface (0.8 m) over its lower right quarter, the odometry's translation
+// 1.5 cm off (as on a blurred frame under fast rotation): the near surface's flow differs from the
+// ego flow by 2.4 px, the wall's by 1 px, and no affine field takes both out. The parallax of the
+// translation error does; a box on the wall moving 5 px more keeps its motion.
+TEST(FlowResidual, ATranslationErrorsParallaxIsTakenOutAndAMoverKeepsItsMotion) {
+  const CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.0f));
+  const cv::Rect near(40, 30, 40, 30), box(8, 8, 16, 16);
+  depth(near).setTo(0.8f);
+  SE3 T_b_a = expSE3((Vector6d() << 0.01, 0.0, 0.005, 0.0, 0.02, 0.0).finished());
+  const FlowField of{egoFlow(depth, cam, T_b_a)};
+  of.uv(box) += cv::Scalar(5.f, 0.f);
+  T_b_a.translation() += Eigen::Vector3d(0.012, -0.008, 0.005);  // the odometry's error, 1.5 cm
+  const cv::Mat e = egoFlow(depth, cam, T_b_a);
+  cv::Mat near_mask(depth.size(), CV_8U, cv::Scalar(0));
+  near_mask(near).setTo(255);
+  cv::Mat wall_mask(depth.size(), CV_8U, cv::Scalar(255));
+  wall_mask(near).setTo(0);
+  wall_mask(box).setTo(0);
+  cv::Mat box_mask(depth.size(), CV_8U, cv::Scalar(0));
+  box_mask(box).setTo(255);
+  const auto worst = [](const std::vector<float>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
+  const cv::Mat affine = flowResidualWithoutAffine(of, e, 1.0);
+  EXPECT_GT(std::max(worst(valuesWhere(affine, near_mask, 255)), worst(valuesWhere(affine, wall_mask, 255))), 0.7)
+      << "the affine fit leaves 0.8 px on the near surface or the wall";
+  const cv::Mat r = flowResidualWithoutPoseError(of, e, depth, cam, 1.0);
+  EXPECT_LT(worst(valuesWhere(r, near_mask, 255)), 0.1) << "the near surface";
+  EXPECT_LT(worst(valuesWhere(r, wall_mask, 255)), 0.1) << "the wall";
+  EXPECT_NEAR(medianOf(valuesWhere(r, box_mask, 255)), 5.0, 0.1)
+      << "the box's own motion";
+  EXPECT_THROW(flowResidualWithoutPoseError(of, e, depth, cam, 0.0), InputError);
+  EXPECT_THROW(flowResidualWithoutPoseError(of, e, cv::Mat(30, 40, CV_32F, cv::Scalar(1.f)), cam, 1.0),
+               InputError);
+}
+
+// The one near surface moving 3 px on a wall of one depth: the parallax term alone can take such a
+// motion for the camera's translation error. Known movers stay out of the fit and keep their motion.
+TEST(FlowResidual, KnownMoversStayOutOfThePoseErrorFit) {
+  const CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.0f));
+  const cv::Rect near(40, 30, 40, 30);
+  depth(near).setTo(0.8f);
+  const SE3 T_b_a = expSE3((Vector6d() << 0.01, 0.0, 0.005, 0.0, 0.02, 0.0).finished());
+  const cv::Mat e = egoFlow(depth, cam, T_b_a);
+  FlowField of{e.clone()};
+  of.uv(near) += cv::Scalar(3.f, 0.f);
+  cv::Mat movers(depth.size(), CV_8U, cv::Scalar(0));
+  movers(near).setTo(255);
+  EXPECT_LT(medianOf(valuesWhere(flowResidualWithoutPoseError(of, e, depth, cam, 1.0), movers, 255)), 0.1)
+      << "unknown, the near mover is taken for the camera's translation error";
+  const cv::Mat r = flowResidualWithoutPoseError(of, e, depth, cam, 1.0, movers);
+  EXPECT_NEAR(medianOf(valuesWhere(r, movers, 255)), 3.0, 0.05) << "the near mover";
+  EXPECT_LT(medianOf(valuesWhere(r, movers, 0)), 0.05) << "the wall";
+  EXPECT_THROW(flowResidualWithoutPoseError(of, e, depth, cam, 1.0, cv::Mat(30, 40, CV_8U, cv::Scalar(0))),
+               InputError);
+}
+
 // The backward flow undoes the forward one except over a patch: there the pixels landing in it are
 // flagged, once the gap exceeds the tolerance plus 5 % of the flow.
 TEST(InconsistentFlow, FlagsWhereTheBackwardFlowDoesNotBringThePixelBack) {

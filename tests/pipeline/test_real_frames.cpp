@@ -20,7 +20,10 @@
 #include <string>
 #include <opencv2/imgcodecs.hpp>
 
+#include "flowfusion/core/image_pyramid.h"
 #include "flowfusion/eval/segmentation_metrics.h"
+#include "flowfusion/flow/flow_residual.h"
+#include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/io/tum_sequence.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
 #include "flowfusion/synth/synthetic_scene.h"
@@ -143,6 +146,59 @@ TEST(RealFrames, ABlurredDeskTheFlowCannotFollowBackIsNoMotion) {
   EXPECT_LT(meanOf(markedShares(seq, config, 64), 30, 64), 0.01) << "frames 30-64 of static fr1/rpy";
   config.scores.flow_consistency_px = 0;
   EXPECT_GT(meanOf(markedShares(seq, config, 64), 30, 64), 0.025) << "the cause: the flow's unchecked matches";
+}
+
+// The median flow residual (segmentation level, px) of frame `cur`'s pixels nearer than near_m
+// and of those farther, against frame cur - 1 under the odometry's motion between the two
+// (DenseOdometry with the defaults), with the affine field or the pose error's field taken out.
+struct NearFarResidual {
+  double near_px, far_px;
+};
+NearFarResidual nearFarResidual(const TumSequence& seq, int cur, double near_m, bool parallax) {
+  const RgbdFrame a = seq.load(cur), b = seq.load(cur - 1);
+  const OdometryConfig oc;
+  const SE3 T_b_a = DenseOdometry(oc)
+                        .estimate(prepareOdometryFrame(a.intensity, a.depth, seq.camera(), oc),
+                                  prepareOdometryFrame(b.intensity, b.depth, seq.camera(), oc))
+                        .T_target_source;
+  const cv::Mat depth = downsampleDepth(a.depth);
+  const CameraIntrinsics cam = seq.camera().atLevel(1);
+  const FlowField flow = resizeFlow(makeOpticalFlow(FlowConfig{})->compute(a.intensity, b.intensity), depth.size());
+  const cv::Mat ego = egoFlow(depth, cam, T_b_a);
+  const cv::Mat r = parallax ? flowResidualWithoutPoseError(flow, ego, depth, cam, 1.0)
+                             : flowResidualWithoutAffine(flow, ego, 1.0);
+  std::vector<float> near, far;
+  for (int v = 0; v < r.rows; ++v)
+    for (int u = 0; u < r.cols; ++u)
+      if (std::isfinite(r.at<float>(v, u))) (depth.at<float>(v, u) < near_m ? near : far).push_back(r.at<float>(v, u));
+  const auto median = [](std::vector<float>& x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return static_cast<double>(x[x.size() / 2]);
+  };
+  return {median(near), median(far)};
+}
+
+TEST(RealFrames, NearSurfacesOfStaticFr1RpyAreNotMovedByTheOdometrysErrorOnBlurredFrames) {
+  // Frames 50-54 (1.7 s) are the most blurred of the turn, and the odometry's translation there is
+  // 1-2 cm off with or without segmentation. A white surface 0.85-0.99 m away enters at the lower
+  // right (the rest of the view is 2-3 m away): with the affine field taken out, its median flow
+  // residual under the frame-to-frame odometry's motion is 1.2 px (0.7 px under the true motion,
+  // which has blur and errors of its own); in `run`, where the error was larger, it reached 4-9 px on
+  // clusters with depth residuals below 2 mm and marked 2.9 % of frame 51. The parallax of the
+  // translation error (scores.flow_error_field) takes it out: 0.45 px, the far surfaces' as before.
+  const auto dir = testing::sharedTum("fr1_rpy_head150");
+  if (!dir) GTEST_SKIP() << testing::sharedDataMissing();
+  const TumSequence seq = TumSequence::open(*dir);
+  NearFarResidual affine{0, 0}, parallax{0, 0};
+  constexpr int kFirst = 50, kLast = 54, kFrames = kLast - kFirst + 1;
+  for (int cur = kFirst; cur <= kLast; ++cur) {
+    const NearFarResidual a = nearFarResidual(seq, cur, 1.1, false), p = nearFarResidual(seq, cur, 1.1, true);
+    affine = {affine.near_px + a.near_px / kFrames, affine.far_px + a.far_px / kFrames};
+    parallax = {parallax.near_px + p.near_px / kFrames, parallax.far_px + p.far_px / kFrames};
+  }
+  EXPECT_LT(parallax.near_px, 0.6) << "surfaces nearer than 1.1 m, frames 50-54: mean of the medians";
+  EXPECT_LT(parallax.far_px, affine.far_px + 0.02) << "surfaces beyond 1.1 m";
+  EXPECT_GT(affine.near_px, 1.0) << "the cause: the affine field alone";
 }
 
 TEST(RealFrames, SmallMarksInsideTheViewOfStaticFr1RpyAreNotWritten) {

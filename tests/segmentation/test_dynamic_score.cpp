@@ -411,9 +411,11 @@ TEST(DynamicScores, BodySmoothingCarriesAMovingPartToItsStillNeighbourAtTheSameD
 
 TEST(ScoreConfig, FlowErrorFieldAndConsistencySettingsAreChecked) {
   nlohmann::json j = ScoreConfig{};
-  EXPECT_EQ(j["flow_error_field"], "affine");
+  EXPECT_EQ(j["flow_error_field"], "affine_parallax");
   j["flow_error_field"] = "none";
   EXPECT_EQ(j.get<ScoreConfig>().flow_error_field, FlowErrorField::kNone);
+  j["flow_error_field"] = "affine";
+  EXPECT_EQ(j.get<ScoreConfig>().flow_error_field, FlowErrorField::kAffine);
   j["flow_error_field"] = "quadratic";
   EXPECT_THROW(j.get<ScoreConfig>(), InputError);
   ScoreConfig cfg;

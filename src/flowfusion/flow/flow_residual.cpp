@@ -88,57 +88,122 @@ cv::Mat landingPositions(const cv::Mat& uv) {
   return out;
 }
 
-// The affine field c + A x (x normalised to [-0.5, 0.5) over the image) as its two rows' three
-// coefficients each.
-struct AffineField {
-  Eigen::Vector3d du = Eigen::Vector3d::Zero(), dv = Eigen::Vector3d::Zero();
-  cv::Vec2f at(double x, double y) const {
-    const Eigen::Vector3d q(1.0, x, y);
-    return {static_cast<float>(du.dot(q)), static_cast<float>(dv.dot(q))};
-  }
+// The affine field c + A x (x normalised to [-0.5, 0.5) over the image) and, with the parallax,
+// the flow a small translation error t of the camera adds at inverse depth iz:
+// iz (fx t_x - (u - c_x) t_z, fy t_y - (v - c_y) t_z). Each row of the field is q . p with
+// q = (1, x, y, iz, -(u - c_x) iz) for du and (1, x, y, iz, -(v - c_y) iz) for dv: pu = (du's c, A
+// row, fx t_x, t_z), pv = (dv's c, A row, fy t_y, t_z), t_z shared.
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+struct ErrorField {
+  Vector5d pu = Vector5d::Zero(), pv = Vector5d::Zero();
 };
 
-AffineField fitAffineField(const cv::Mat& d, double scale_px) {
-  struct Sample {
-    double x, y, du, dv;
-  };
-  std::vector<Sample> samples;
+// A sample of the residual field: the residual vector and its two rows' q (iz 0 without a depth).
+struct FieldSample {
+  double du, dv;
+  Vector5d qu, qv;
+};
+
+FieldSample fieldSample(double x, double y, double du, double dv, double u_c_px, double v_c_px, double iz) {
+  FieldSample s{du, dv, Vector5d(), Vector5d()};
+  s.qu << 1.0, x, y, iz, -u_c_px * iz;
+  s.qv << 1.0, x, y, iz, -v_c_px * iz;
+  return s;
+}
+
+// The samples on a 4-pixel grid where d is finite (and, with a depth, the depth is valid) and
+// left_out (CV_8U, if given) is 0.
+std::vector<FieldSample> fieldSamples(const cv::Mat& d, const cv::Mat& depth, const CameraIntrinsics* camera,
+                                      const cv::Mat& left_out = {}) {
+  std::vector<FieldSample> samples;
   constexpr int kGridPx = 4;
   for (int v = 0; v < d.rows; v += kGridPx) {
     const auto* row = d.ptr<cv::Vec2f>(v);
-    for (int u = 0; u < d.cols; u += kGridPx)
-      if (std::isfinite(row[u][0]) && std::isfinite(row[u][1]))
-        samples.push_back({static_cast<double>(u) / d.cols - 0.5, static_cast<double>(v) / d.rows - 0.5, row[u][0], row[u][1]});
+    for (int u = 0; u < d.cols; u += kGridPx) {
+      if (!std::isfinite(row[u][0]) || !std::isfinite(row[u][1])) continue;
+      if (!left_out.empty() && left_out.at<uint8_t>(v, u)) continue;
+      double iz = 0, u_c = 0, v_c = 0;
+      if (camera) {
+        const float z = depth.at<float>(v, u);
+        if (!(z > 0) || !std::isfinite(z)) continue;
+        iz = 1.0 / z;
+        u_c = u - camera->cx;
+        v_c = v - camera->cy;
+      }
+      samples.push_back(fieldSample(static_cast<double>(u) / d.cols - 0.5, static_cast<double>(v) / d.rows - 0.5,
+                                    row[u][0], row[u][1], u_c, v_c, iz));
+    }
   }
-  AffineField field;
+  return samples;
+}
+
+// The field's unknowns from the two rows' weighted normal equations (q q^T and q d sums): the
+// affine part's two 3x3 systems, or with the parallax one system of the nine unknowns (pu's five,
+// pv's first four, t_z shared) with a small relative ridge: where the depths barely vary the
+// parallax and the affine part are interchangeable (the field, not its parameters, is the answer).
+void solveField(const Eigen::Matrix<double, 5, 5>& Nu, const Vector5d& ru, const Eigen::Matrix<double, 5, 5>& Nv,
+                const Vector5d& rv, bool parallax, ErrorField& field) {
+  if (!parallax) {
+    field.pu.head<3>() = Eigen::LDLT<Eigen::Matrix3d>(Nu.topLeftCorner<3, 3>()).solve(ru.head<3>());
+    field.pv.head<3>() = Eigen::LDLT<Eigen::Matrix3d>(Nv.topLeftCorner<3, 3>()).solve(rv.head<3>());
+    return;
+  }
+  constexpr int kU[5] = {0, 1, 2, 3, 8}, kV[5] = {4, 5, 6, 7, 8};
+  Eigen::Matrix<double, 9, 9> N = Eigen::Matrix<double, 9, 9>::Zero();
+  Eigen::Matrix<double, 9, 1> r = Eigen::Matrix<double, 9, 1>::Zero();
+  for (int a = 0; a < 5; ++a) {
+    r[kU[a]] += ru[a];
+    r[kV[a]] += rv[a];
+    for (int b = 0; b < 5; ++b) {
+      N(kU[a], kU[b]) += Nu(a, b);
+      N(kV[a], kV[b]) += Nv(a, b);
+    }
+  }
+  constexpr double kRidge = 1e-6;
+  N.diagonal() *= 1.0 + kRidge;
+  const Eigen::Matrix<double, 9, 1> p = Eigen::LDLT<Eigen::Matrix<double, 9, 9>>(N).solve(r);
+  for (int a = 0; a < 5; ++a) {
+    field.pu[a] = p[kU[a]];
+    field.pv[a] = p[kV[a]];
+  }
+}
+
+// Cauchy IRLS of scale scale_px from the zero field (6 iterations); without the parallax its
+// unknowns stay 0.
+ErrorField fitErrorField(const std::vector<FieldSample>& samples, double scale_px, bool parallax) {
+  ErrorField field;
   constexpr size_t kMinSamples = 50;  // fewer: no field (a frame almost without depth)
   constexpr int kIterations = 6;
   if (samples.size() < kMinSamples) return field;
   const double inv_scale2 = 1.0 / (scale_px * scale_px);
   for (int it = 0; it < kIterations; ++it) {
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d rhs_u = Eigen::Vector3d::Zero(), rhs_v = Eigen::Vector3d::Zero();
-    for (const Sample& s : samples) {
-      const Eigen::Vector3d q(1.0, s.x, s.y);
-      const double eu = s.du - field.du.dot(q), ev = s.dv - field.dv.dot(q);
+    Eigen::Matrix<double, 5, 5> Nu = Eigen::Matrix<double, 5, 5>::Zero(), Nv = Nu;
+    Vector5d ru = Vector5d::Zero(), rv = Vector5d::Zero();
+    for (const FieldSample& s : samples) {
+      const double eu = s.du - s.qu.dot(field.pu), ev = s.dv - s.qv.dot(field.pv);
       const double w = 1.0 / (1.0 + (eu * eu + ev * ev) * inv_scale2);  // Cauchy
-      normal += w * q * q.transpose();
-      rhs_u += w * s.du * q;
-      rhs_v += w * s.dv * q;
+      Nu.noalias() += w * s.qu * s.qu.transpose();
+      Nv.noalias() += w * s.qv * s.qv.transpose();
+      ru.noalias() += w * s.du * s.qu;
+      rv.noalias() += w * s.dv * s.qv;
     }
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
-    field.du = ldlt.solve(rhs_u);
-    field.dv = ldlt.solve(rhs_v);
+    solveField(Nu, ru, Nv, rv, parallax, field);
   }
   return field;
 }
 
-// d(x) -= field(x) over the image, in place.
-void subtractField(cv::Mat& d, const AffineField& field) {
+// d(x) -= field(x) over the image, in place (at the samples' grid and between them alike).
+void subtractField(cv::Mat& d, const ErrorField& field, const cv::Mat& depth, const CameraIntrinsics* camera) {
   for (int v = 0; v < d.rows; ++v) {
     auto* row = d.ptr<cv::Vec2f>(v);
     const double y = static_cast<double>(v) / d.rows - 0.5;
-    for (int u = 0; u < d.cols; ++u) row[u] -= field.at(static_cast<double>(u) / d.cols - 0.5, y);
+    for (int u = 0; u < d.cols; ++u) {
+      const float z = camera ? depth.at<float>(v, u) : 0.f;
+      const double iz = z > 0 && std::isfinite(z) ? 1.0 / z : 0.0;
+      const FieldSample s = fieldSample(static_cast<double>(u) / d.cols - 0.5, y, 0, 0,
+                                        camera ? u - camera->cx : 0.0, camera ? v - camera->cy : 0.0, iz);
+      row[u] -= cv::Vec2f(static_cast<float>(s.qu.dot(field.pu)), static_cast<float>(s.qv.dot(field.pv)));
+    }
   }
 }
 
@@ -163,7 +228,20 @@ cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow
   if (!(scale_px > 0) || !std::isfinite(scale_px))
     throw InputError("flowResidualWithoutAffine: the fit's scale must be a finite number of pixels > 0");
   cv::Mat d = residualVectors(flow, ego_flow, "flowResidualWithoutAffine");
-  subtractField(d, fitAffineField(d, scale_px));
+  subtractField(d, fitErrorField(fieldSamples(d, {}, nullptr), scale_px, false), {}, nullptr);
+  return lengths(d);
+}
+
+cv::Mat flowResidualWithoutPoseError(const FlowField& flow, const cv::Mat& ego_flow, const cv::Mat& depth,
+                                     const CameraIntrinsics& camera, double scale_px, const cv::Mat& movers) {
+  if (!(scale_px > 0) || !std::isfinite(scale_px))
+    throw InputError("flowResidualWithoutPoseError: the fit's scale must be a finite number of pixels > 0");
+  cv::Mat d = residualVectors(flow, ego_flow, "flowResidualWithoutPoseError");
+  if (depth.type() != CV_32FC1 || depth.size() != d.size() || camera.width != d.cols || camera.height != d.rows)
+    throw InputError("flowResidualWithoutPoseError: the depth and camera must be CV_32FC1 of the ego flow's size");
+  if (!movers.empty() && (movers.type() != CV_8UC1 || movers.size() != d.size()))
+    throw InputError("flowResidualWithoutPoseError: the movers must be CV_8UC1 of the ego flow's size");
+  subtractField(d, fitErrorField(fieldSamples(d, depth, &camera, movers), scale_px, true), depth, &camera);
   return lengths(d);
 }
 

@@ -33,6 +33,17 @@ cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
 // the majority and would be fitted away. Same validity and size as flowResidual; scale_px > 0.
 cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow, double scale_px);
 
+// flowResidualWithoutAffine's fit with the parallax of a small error t of the camera's translation
+// added: iz (fx t_x - (u - c_x) t_z, fy t_y - (v - c_y) t_z) at the pixel's inverse depth iz (`depth`,
+// CV_32FC1, and `camera` of the ego flow's size; pixels without depth only take the affine part).
+// On blurred frames under fast rotation the odometry's translation can be off by 1-2 cm, which
+// moves near surfaces by several pixels more than far ones: a field no affine fit takes out. The
+// rotation's error is the affine part's (to first order). A mover near the camera could take the
+// parallax term for itself, so the pixels of `movers` (CV_8UC1, non-zero; optional) stay out of the
+// fit. Same validity and size as flowResidual.
+cv::Mat flowResidualWithoutPoseError(const FlowField& flow, const cv::Mat& ego_flow, const cv::Mat& depth,
+                                     const CameraIntrinsics& camera, double scale_px, const cv::Mat& movers = {});
+
 // Pixels whose forward flow (A to B) the backward flow (B to A) does not bring back:
 // |forward(x) + backward(x + forward(x))| above tolerance_px plus 5 % of |forward(x)| (backward
 // sampled bilinearly, replicated past the border). There the flow matched nothing reliable (motion

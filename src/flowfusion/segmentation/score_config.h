@@ -20,9 +20,10 @@ FLOWFUSION_CONFIG_ENUM(ModelMotionCue, "scores.model_motion_cue", {ModelMotionCu
 enum class FlowErrorField {
   kNone,    // none: r_F as Eq. 9
   kAffine,  // an affine field over the image, fitted robustly to the residual (flowResidualWithoutAffine)
+  kAffineParallax,  // ... and the parallax of a translation error (flowResidualWithoutPoseError)
 };
 FLOWFUSION_CONFIG_ENUM(FlowErrorField, "scores.flow_error_field", {FlowErrorField::kNone, "none"},
-                       {FlowErrorField::kAffine, "affine"})
+                       {FlowErrorField::kAffine, "affine"}, {FlowErrorField::kAffineParallax, "affine_parallax"})
 
 struct ScoreConfig {
   // Weights of Eq. 10. Units: r_I in grey levels (0 to 1), r_D / D_i dimensionless, r_F in pixels
@@ -145,8 +146,10 @@ struct ScoreConfig {
   // Our extension: a small error of the camera's rotation, the rolling shutter and the colour-depth
   // offset under rotation shift the whole static background by a smooth field of a few pixels,
   // which r_F counts as motion everywhere; kAffine takes a robust affine fit of it out of r_F
-  // against the camera's motion (docs/tuning.md#flow_error_field).
-  FlowErrorField flow_error_field = FlowErrorField::kAffine;
+  // against the camera's motion. On blurred frames the odometry's translation can be 1-2 cm off,
+  // which moves near surfaces more than far ones; kAffineParallax fits that parallax too, away
+  // from the pixels the scores already hold for movers (docs/tuning.md#flow_error_field).
+  FlowErrorField flow_error_field = FlowErrorField::kAffineParallax;
   // Pixels of the input image (our extension; 0 = off): r_F is no evidence where the flow back from
   // the previous image does not bring the pixel back within this plus 5 % of its flow
   // (inconsistentFlow): there the flow matched nothing reliable (blur, occlusion, no texture). A
