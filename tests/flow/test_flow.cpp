@@ -192,8 +192,7 @@ TEST(FlowResidual, ATranslationErrorsParallaxIsTakenOutAndAMoverKeepsItsMotion) 
   const cv::Mat r = flowResidualWithoutPoseError(of, e, depth, cam, 1.0);
   EXPECT_LT(worst(valuesWhere(r, near_mask, 255)), 0.1) << "the near surface";
   EXPECT_LT(worst(valuesWhere(r, wall_mask, 255)), 0.1) << "the wall";
-  EXPECT_NEAR(medianOf(valuesWhere(r, box_mask, 255)), 5.0, 0.1)
-      << "the box's own motion";
+  EXPECT_NEAR(medianOf(valuesWhere(r, box_mask, 255)), 5.0, 0.1) << "the box's own motion";
   EXPECT_THROW(flowResidualWithoutPoseError(of, e, depth, cam, 0.0), InputError);
   EXPECT_THROW(flowResidualWithoutPoseError(of, e, cv::Mat(30, 40, CV_32F, cv::Scalar(1.f)), cam, 1.0),
                InputError);

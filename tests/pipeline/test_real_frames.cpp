@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <opencv2/imgcodecs.hpp>
@@ -23,8 +24,8 @@
 #include "flowfusion/core/image_pyramid.h"
 #include "flowfusion/eval/segmentation_metrics.h"
 #include "flowfusion/flow/flow_residual.h"
-#include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/io/tum_sequence.h"
+#include "flowfusion/odometry/dense_odometry.h"
 #include "flowfusion/pipeline/flowfusion_system.h"
 #include "flowfusion/synth/synthetic_scene.h"
 #include "testing/test_util.h"
@@ -148,13 +149,13 @@ TEST(RealFrames, ABlurredDeskTheFlowCannotFollowBackIsNoMotion) {
   EXPECT_GT(meanOf(markedShares(seq, config, 64), 30, 64), 0.025) << "the cause: the flow's unchecked matches";
 }
 
-// The median flow residual (segmentation level, px) of frame `cur`'s pixels nearer than near_m
-// and of those farther, against frame cur - 1 under the odometry's motion between the two
-// (DenseOdometry with the defaults), with the affine field or the pose error's field taken out.
-struct NearFarResidual {
-  double near_px, far_px;
+// Frame `cur`'s flow residual (segmentation level, px) against frame cur - 1 under the odometry's
+// motion between the two (DenseOdometry with the defaults), with the affine field or the pose
+// error's field taken out, and the depth it was taken at.
+struct PairResiduals {
+  cv::Mat depth, affine, parallax;
 };
-NearFarResidual nearFarResidual(const TumSequence& seq, int cur, double near_m, bool parallax) {
+PairResiduals pairResiduals(const TumSequence& seq, int cur) {
   const RgbdFrame a = seq.load(cur), b = seq.load(cur - 1);
   const OdometryConfig oc;
   const SE3 T_b_a = DenseOdometry(oc)
@@ -165,17 +166,18 @@ NearFarResidual nearFarResidual(const TumSequence& seq, int cur, double near_m, 
   const CameraIntrinsics cam = seq.camera().atLevel(1);
   const FlowField flow = resizeFlow(makeOpticalFlow(FlowConfig{})->compute(a.intensity, b.intensity), depth.size());
   const cv::Mat ego = egoFlow(depth, cam, T_b_a);
-  const cv::Mat r = parallax ? flowResidualWithoutPoseError(flow, ego, depth, cam, 1.0)
-                             : flowResidualWithoutAffine(flow, ego, 1.0);
-  std::vector<float> near, far;
-  for (int v = 0; v < r.rows; ++v)
-    for (int u = 0; u < r.cols; ++u)
-      if (std::isfinite(r.at<float>(v, u))) (depth.at<float>(v, u) < near_m ? near : far).push_back(r.at<float>(v, u));
-  const auto median = [](std::vector<float>& x) {
-    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
-    return static_cast<double>(x[x.size() / 2]);
-  };
-  return {median(near), median(far)};
+  return {depth, flowResidualWithoutAffine(flow, ego, 1.0), flowResidualWithoutPoseError(flow, ego, depth, cam, 1.0)};
+}
+
+// The median residual of the pixels nearer than near_m and of those farther.
+struct NearFarResidual {
+  double near_px, far_px;
+};
+NearFarResidual nearFarResidual(const cv::Mat& r, const cv::Mat& depth, double near_m) {
+  cv::Mat near = r.clone(), far = r.clone();
+  near.setTo(std::numeric_limits<float>::quiet_NaN(), depth >= near_m);
+  far.setTo(std::numeric_limits<float>::quiet_NaN(), depth < near_m);
+  return {finiteMedian(near), finiteMedian(far)};
 }
 
 TEST(RealFrames, NearSurfacesOfStaticFr1RpyAreNotMovedByTheOdometrysErrorOnBlurredFrames) {
@@ -192,7 +194,8 @@ TEST(RealFrames, NearSurfacesOfStaticFr1RpyAreNotMovedByTheOdometrysErrorOnBlurr
   NearFarResidual affine{0, 0}, parallax{0, 0};
   constexpr int kFirst = 50, kLast = 54, kFrames = kLast - kFirst + 1;
   for (int cur = kFirst; cur <= kLast; ++cur) {
-    const NearFarResidual a = nearFarResidual(seq, cur, 1.1, false), p = nearFarResidual(seq, cur, 1.1, true);
+    const PairResiduals r = pairResiduals(seq, cur);
+    const NearFarResidual a = nearFarResidual(r.affine, r.depth, 1.1), p = nearFarResidual(r.parallax, r.depth, 1.1);
     affine = {affine.near_px + a.near_px / kFrames, affine.far_px + a.far_px / kFrames};
     parallax = {parallax.near_px + p.near_px / kFrames, parallax.far_px + p.far_px / kFrames};
   }

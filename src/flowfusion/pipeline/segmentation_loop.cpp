@@ -51,7 +51,7 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       past_views_(seg_camera_, config.scores.model_view_every_frames, config.scores.model_views) {}
 
 cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur,
-                                         const SE3& T_prev_cur, bool camera_motion, const cv::Mat& scores) const {
+                                         const SE3& T_prev_cur, bool camera_motion, const cv::Mat& movers) const {
   const int level = config_.pipeline.segmentation_level;
   const cv::Mat ego = egoFlow(cur.level(level).depth, seg_camera_, T_prev_cur);
   // The error field's robust fit: a residual beyond a pixel of the segmentation level counts less.
@@ -59,7 +59,7 @@ cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const Odomet
   const FlowErrorField field = camera_motion ? config_.scores.flow_error_field : FlowErrorField::kNone;
   const cv::Mat r = field == FlowErrorField::kAffineParallax
                         ? flowResidualWithoutPoseError(seg_flow, ego, cur.level(level).depth, seg_camera_,
-                                                       kFieldScalePx, scores.empty() ? cv::Mat() : scores > kDynamicScore)
+                                                       kFieldScalePx, movers)
                     : field == FlowErrorField::kAffine ? flowResidualWithoutAffine(seg_flow, ego, kFieldScalePx)
                                                        : flowResidual(seg_flow, ego);
   return r * std::ldexp(1.0, level);
@@ -129,12 +129,12 @@ FlowField SegmentationLoop::longBaselineFlow(const FlowField& seg_flow, const Se
 
 cv::Mat SegmentationLoop::longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur,
                                                const SE3& T_world_cur, const cv::Mat& r_pair,
-                                               const cv::Mat& scores) const {
+                                               const cv::Mat& movers) const {
   if (seg_long_flow.uv.empty()) return {};
   const SE3 T_past_cur = long_baseline_.front().T_world_cam.inverse() * T_world_cur;
   // The chain's own error brought to the frame's typical one and, with long_baseline_noise_px, to
   // the pair's, or to that setting where the pair's is below it.
-  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true, scores),
+  return relativeToFrameError(flowResidualAt(seg_long_flow, cur, T_past_cur, true, movers),
                               longBaselineTypicalErrorPx(config_.scores, finiteMedian(r_pair)));
 }
 
@@ -311,12 +311,13 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       res.r_I = pr.abs_intensity;
       res.r_D = pr.abs_depth;
       res.on_target_mover = pr.on_target_mover;
-      const cv::Mat r_pair =
-          relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur, true, estimate.scores),
-                               config_.scores.flow_error_px);
+      // The pixels the scores hold for movers so far stay out of the residual's error field.
+      const cv::Mat movers = estimate.scores.empty() ? cv::Mat() : cv::Mat(estimate.scores > kDynamicScore);
+      const cv::Mat r_pair = relativeToFrameError(flowResidualAt(seg_flow, in.cur, T_prev_cur, true, movers),
+                                                  config_.scores.flow_error_px);
       res.r_F = largerResidual(r_pair, longBaselineResidual(seg_long_flow, in.cur,
                                                             in.target.T_world_target * estimate.T_target_cur, r_pair,
-                                                            estimate.scores));
+                                                            movers));
       if (!flow_inconsistent.empty()) res.r_F.setTo(std::numeric_limits<float>::quiet_NaN(), flow_inconsistent);
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);

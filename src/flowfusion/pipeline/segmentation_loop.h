@@ -74,9 +74,9 @@ class SegmentationLoop {
   // r_F (Eq. 9) at the segmentation level under T_prev_cur, in pixels of the input image;
   // `seg_flow` is the flow resampled to the segmentation level (resizeFlow). Against the camera's
   // own motion (camera_motion) without the systematic field scores.flow_error_field names, fitted
-  // away from the pixels `scores` (b at the segmentation level, optional) holds for movers.
+  // away from `movers` (CV_8U at the segmentation level, non-zero; optional).
   cv::Mat flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur, const SE3& T_prev_cur,
-                         bool camera_motion, const cv::Mat& scores = {}) const;
+                         bool camera_motion, const cv::Mat& movers = {}) const;
   // 255 where the flow fails scores.flow_consistency_px's check (segmentation level); empty when off.
   cv::Mat inconsistentAt(const FrameCues& cues, const FlowField& seg_flow) const;
   // Where the samples' points lay in the previous frame (its depth) against the static map's depth
@@ -116,7 +116,7 @@ class SegmentationLoop {
   // the larger of scores.long_baseline_noise_px and the median of the frame pair's r_pair; empty
   // without it.
   cv::Mat longBaselineResidual(const FlowField& seg_long_flow, const OdometryFrame& cur, const SE3& T_world_cur,
-                               const cv::Mat& r_pair, const cv::Mat& scores) const;
+                               const cv::Mat& r_pair, const cv::Mat& movers) const;
   // Keeps the scored frame for the long baseline; a frame whose odometry failed, or that does not
   // follow the last kept one, empties the window first.
   void keepForLongBaseline(const SegmentationInput& in, const FlowField& seg_flow, const MotionEstimate& estimate);
