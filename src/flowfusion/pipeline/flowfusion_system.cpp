@@ -146,7 +146,7 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   // As a target (the next frame's previous frame or keyframe), this frame's moving pixels count less.
   targets_.advance({frame, std::move(cur), result.T_world_cam, scores, staticWeights(scores)}, result.tracking_ok,
                    result.dynamic_mask, map_.get(), timings_);
-  if (!full_scores.empty()) finishWrittenMask(frame, tracked.map_agreement, result.dynamic_mask);
+  if (!full_scores.empty()) finishWrittenMask(frame, tracked, result.dynamic_mask);
   trajectory_.push_back({frame.timestamp, atColourTime(frame, result.T_world_cam)});
   if (slam_) {
     StageTimer timer(timings_, "loop_closure");
@@ -156,12 +156,14 @@ FrameResult FlowFusionSystem::process(const RgbdFrame& frame) {
   return result;
 }
 
-void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const cv::Mat& map_agreement, cv::Mat& mask) const {
+void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedScores& tracked, cv::Mat& mask) const {
   // Only the written mask: the tracking and the map have used the scores, and pixels without depth
   // are nothing either can use.
   const PipelineOptions& opt = config_.pipeline;
-  if (opt.mask_map_agreement) clearMapAgreement(mask, map_agreement);
-  dropSmallInteriorRegions(mask, opt.mask_min_region);
+  if (opt.mask_map_agreement) clearMapAgreement(mask, tracked.map_agreement);
+  cv::Mat keep;
+  if (!tracked.seen_moving.empty()) cv::resize(tracked.seen_moving, keep, mask.size(), 0, 0, cv::INTER_NEAREST);
+  dropSmallInteriorRegions(mask, opt.mask_min_region, keep);
   if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share);
 }
 
@@ -202,7 +204,7 @@ FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, 
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
   velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
-  return {estimate.scores, estimate.map_agreement, std::move(estimate.cluster_log)};
+  return {estimate.scores, estimate.map_agreement, estimate.seen_moving, std::move(estimate.cluster_log)};
 }
 
 MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,

@@ -11,6 +11,7 @@
 #include "flowfusion/segmentation/dynamic_score.h"
 #include "flowfusion/segmentation/score_carry.h"
 #include "flowfusion/segmentation/score_evidence.h"
+#include "flowfusion/segmentation/small_regions.h"
 
 namespace ff {
 
@@ -336,6 +337,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     if (done) break;
   }
   if (opt.cluster_log) estimate.cluster_log = clusterLog(graph, res, scores);
+  if (opt.mask_min_region > 0 && opt.mask_keep_flow_px > 0)
+    estimate.seen_moving =
+        seenMovingClusters(graph, res, scores, opt.mask_keep_flow_px, opt.mask_keep_max_agreement);
   const SE3 T_world_scored = in.target.T_world_target * estimate.T_target_cur;
   memory_.remember(graph, scores, seg_frame.depth, T_world_scored, in.frame.timestamp);
   past_views_.add(seg_frame.depth, estimate.scores, T_world_scored, in.frame.timestamp);

@@ -33,6 +33,9 @@ struct MotionEstimate {
   // 255 where the pixel coincides with the stable static map (modelAgreement) at the segmentation
   // level; empty without a map or a scored frame
   cv::Mat map_agreement;
+  // 255 on the clusters seen moving with a flow of their own (seenMovingClusters), whose small
+  // regions the written mask keeps, at the segmentation level; empty when none or the rule is off
+  cv::Mat seen_moving;
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
   bool restarted_from_flow = false;

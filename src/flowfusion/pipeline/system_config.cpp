@@ -28,6 +28,10 @@ void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
     throw InputError("pipeline.mask_hole_share must be 0 (never) to 1 (a share of the hole's neighbours)");
   if (!(p.mask_min_region >= 0 && p.mask_min_region < 1))
     throw InputError("pipeline.mask_min_region must be 0 (keep every region) or a share of the image below 1");
+  if (!(p.mask_keep_flow_px >= 0 && p.mask_keep_flow_px <= 1e4))
+    throw InputError("pipeline.mask_keep_flow_px must be 0 (keep no small region) to 1e4 pixels");
+  if (!(p.mask_keep_max_agreement > 0 && p.mask_keep_max_agreement <= 1))
+    throw InputError("pipeline.mask_keep_max_agreement must be in (0, 1] (a share of a cluster's pixels)");
   if (p.fusion_every < 1 || p.fusion_every > 1000) throw InputError("pipeline.fusion_every must be 1 to 1000");
   if (!(p.model_min_valid_fraction >= 0 && p.model_min_valid_fraction <= 1))
     throw InputError("pipeline.model_min_valid_fraction must be in [0, 1]");

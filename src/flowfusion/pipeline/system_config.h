@@ -52,6 +52,11 @@ struct PipelineOptions {
   // Share of the image (0: keep all): a dynamic region smaller than it that touches no image border
   // is written as static (dropSmallInteriorRegions: a static cluster's own residual on real frames).
   double mask_min_region = 0.02;
+  // Pixels of the input image (0: drop them all): such a small region stays when most of it lies on
+  // clusters seen moving with a flow residual of at least this and less than
+  // mask_keep_max_agreement of their pixels on the stable map (seenMovingClusters: a box 2 m away).
+  double mask_keep_flow_px = 4.0;
+  double mask_keep_max_agreement = 0.1;
   // Keep each scored frame's per-cluster evidence (FrameResult::clusters; `run --cluster-log`
   // writes it): why a region is marked or not. One row per cluster.
   bool cluster_log = false;
@@ -79,7 +84,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyfr
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
-                                                mask_map_agreement, mask_min_region, cluster_log, carry_scores,
+                                                mask_map_agreement, mask_min_region, mask_keep_flow_px,
+                                                mask_keep_max_agreement, cluster_log, carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
                                                 model_min_valid_fraction, budget_ms)
 

@@ -1,6 +1,7 @@
 #include "flowfusion/segmentation/small_regions.h"
 
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
 
 #include "flowfusion/core/error.h"
@@ -8,25 +9,69 @@
 
 namespace ff {
 
-void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share) {
+namespace {
+
+// Per region of `regions` (labels 0..n-1), how many of its pixels are non-zero in `keep`.
+std::vector<int> keptPixels(const cv::Mat& regions, int n, const cv::Mat& keep) {
+  std::vector<int> kept(n, 0);
+  if (keep.empty()) return kept;
+  for (int v = 0; v < regions.rows; ++v) {
+    const int* r = regions.ptr<int>(v);
+    const uchar* k = keep.ptr<uchar>(v);
+    for (int u = 0; u < regions.cols; ++u)
+      if (r[u] > 0 && k[u]) ++kept[r[u]];
+  }
+  return kept;
+}
+
+}  // namespace
+
+void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share, const cv::Mat& keep) {
   if (mask.empty() || mask.type() != CV_8UC1)
     throw InputError("dropSmallInteriorRegions: the mask must be a non-empty CV_8UC1 image");
   if (!(min_area_share >= 0 && min_area_share < 1))
     throw InputError("dropSmallInteriorRegions: min_area_share must be in [0, 1)");
+  if (!keep.empty() && (keep.type() != CV_8UC1 || keep.size() != mask.size()))
+    throw InputError("dropSmallInteriorRegions: keep must be a CV_8UC1 image of the mask's size");
   if (min_area_share == 0) return;
   cv::Mat regions, stats, centroids;
   const int n = cv::connectedComponentsWithStats(mask > 0, regions, stats, centroids, 8, CV_32S);
   const double min_area = min_area_share * static_cast<double>(mask.total());
+  const std::vector<int> kept = keptPixels(regions, n, keep);
   std::vector<uchar> drop(n, 0);
   bool any = false;
   for (int r = 1; r < n; ++r) {
     const int x = stats.at<int>(r, cv::CC_STAT_LEFT), y = stats.at<int>(r, cv::CC_STAT_TOP);
     const int w = stats.at<int>(r, cv::CC_STAT_WIDTH), h = stats.at<int>(r, cv::CC_STAT_HEIGHT);
+    const int area = stats.at<int>(r, cv::CC_STAT_AREA);
     const bool on_border = x == 0 || y == 0 || x + w == mask.cols || y + h == mask.rows;
-    drop[r] = !on_border && stats.at<int>(r, cv::CC_STAT_AREA) < min_area;
+    drop[r] = !on_border && area < min_area && 2 * kept[r] <= area;
     any = any || drop[r];
   }
   if (any) setChosenRegions(mask, regions, drop, 0);
+}
+
+cv::Mat seenMovingClusters(const ClusterGraph& graph, const ResidualImages& residuals, const DynamicScores& scores,
+                           double min_flow_px, double max_map_agreement) {
+  const int n = graph.num_clusters;
+  if (static_cast<int>(scores.moving.size()) != n)
+    throw InputError("seenMovingClusters: " + std::to_string(scores.moving.size()) + " moving flags for " +
+                     std::to_string(n) + " clusters");
+  std::vector<uchar> seen(n, 0);
+  if (min_flow_px > 0) {
+    const ClusterMeans r_F = clusterMeans(graph, residuals.r_F, "r_F");
+    const ClusterMeans a_M = clusterMeans(graph, residuals.a_M, "a_M");
+    for (int c = 0; c < n; ++c)
+      seen[c] = scores.moving[c] && r_F.has(c) && r_F.mean(c) >= min_flow_px &&
+                !(a_M.has(c) && a_M.mean(c) >= max_map_agreement);
+  }
+  cv::Mat out(graph.labels.size(), CV_8UC1);
+  for (int v = 0; v < out.rows; ++v) {
+    const int* l = graph.labels.ptr<int>(v);
+    uchar* o = out.ptr<uchar>(v);
+    for (int u = 0; u < out.cols; ++u) o[u] = (l[u] >= 0 && l[u] < n && seen[l[u]]) ? 255 : 0;
+  }
+  return out;
 }
 
 }  // namespace ff
