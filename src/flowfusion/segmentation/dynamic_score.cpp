@@ -151,17 +151,21 @@ DynamicScores computeDynamicScores(const ClusterGraph& graph, const ResidualImag
   return out;
 }
 
-cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores) {
-  if (static_cast<int>(scores.b.size()) != graph.num_clusters)
-    throw InputError("pixelScores: " + std::to_string(scores.b.size()) + " scores for " +
+cv::Mat clusterValues(const ClusterGraph& graph, const std::vector<float>& per_cluster, const char* who) {
+  if (static_cast<int>(per_cluster.size()) != graph.num_clusters)
+    throw InputError(std::string(who) + ": " + std::to_string(per_cluster.size()) + " values for " +
                      std::to_string(graph.num_clusters) + " clusters");
   cv::Mat out(graph.labels.size(), CV_32FC1);
   for (int v = 0; v < out.rows; ++v) {
     const int* l = graph.labels.ptr<int>(v);
     float* o = out.ptr<float>(v);
-    for (int u = 0; u < out.cols; ++u) o[u] = (l[u] >= 0 && l[u] < graph.num_clusters) ? scores.b[l[u]] : 0.f;
+    for (int u = 0; u < out.cols; ++u) o[u] = (l[u] >= 0 && l[u] < graph.num_clusters) ? per_cluster[l[u]] : 0.f;
   }
   return out;
+}
+
+cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores) {
+  return clusterValues(graph, scores.b, "pixelScores");
 }
 
 cv::Mat dynamicMask(const cv::Mat& pixel_scores, float threshold) {

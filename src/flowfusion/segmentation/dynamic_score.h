@@ -67,6 +67,9 @@ Eigen::VectorXd solveScoreEnergy(const std::vector<double>& delta, const std::ve
                                  const std::vector<double>& prior = {}, double lambda_T = 0.0,
                                  const std::vector<double>& edge_scale = {});
 
+// Each pixel of A its cluster's entry of `per_cluster` (CV_32F), 0 where no cluster; throws
+// InputError when `per_cluster` does not hold one value per cluster (`who` names the caller).
+cv::Mat clusterValues(const ClusterGraph& graph, const std::vector<float>& per_cluster, const char* who);
 // b per pixel of A (CV_32F), 0 where no cluster.
 cv::Mat pixelScores(const ClusterGraph& graph, const DynamicScores& scores);
 // 255 where the pixel score exceeds `threshold`, else 0 (CV_8U).

@@ -57,7 +57,7 @@ cv::Mat seenMovingClusters(const ClusterGraph& graph, const ResidualImages& resi
   if (static_cast<int>(scores.moving.size()) != n)
     throw InputError("seenMovingClusters: " + std::to_string(scores.moving.size()) + " moving flags for " +
                      std::to_string(n) + " clusters");
-  std::vector<uchar> seen(n, 0);
+  std::vector<float> seen(n, 0.f);
   if (min_flow_px > 0) {
     const ClusterMeans r_F = clusterMeans(graph, residuals.r_F, "r_F");
     const ClusterMeans a_M = clusterMeans(graph, residuals.a_M, "a_M");
@@ -65,13 +65,7 @@ cv::Mat seenMovingClusters(const ClusterGraph& graph, const ResidualImages& resi
       seen[c] = scores.moving[c] && r_F.has(c) && r_F.mean(c) >= min_flow_px &&
                 !(a_M.has(c) && a_M.mean(c) >= max_map_agreement);
   }
-  cv::Mat out(graph.labels.size(), CV_8UC1);
-  for (int v = 0; v < out.rows; ++v) {
-    const int* l = graph.labels.ptr<int>(v);
-    uchar* o = out.ptr<uchar>(v);
-    for (int u = 0; u < out.cols; ++u) o[u] = (l[u] >= 0 && l[u] < n && seen[l[u]]) ? 255 : 0;
-  }
-  return out;
+  return dynamicMask(clusterValues(graph, seen, "seenMovingClusters"), 0.5f);
 }
 
 }  // namespace ff
