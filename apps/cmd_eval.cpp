@@ -30,6 +30,7 @@ struct EvalOptions {
   report::WorstMasksOptions sheet_options;
   bool overwrite = false;
   double max_diff_s = 0.02;
+  double offset_s = 0;    // eval ate, rpe: added to EST's timestamps
   bool no_align = false;  // eval ate: compare the poses as they stand
   double delta_s = 1.0;
   double threshold_m = 0.03;
@@ -48,8 +49,17 @@ void printStats(const char* prefix, const eval::ErrorStats& s, const char* unit)
   for (const auto& [name, v] : rows) std::printf("%s.%s %f %s\n", prefix, name, v, unit);
 }
 
+void addOffsetOption(CLI::App* command, double& offset_s) {
+  command
+      ->add_option("--offset", offset_s,
+                   "seconds added to EST's timestamps before the association, as the TUM scripts' --offset (a "
+                   "camera stamped late, on arrival, against the ground truth's clock)")
+      ->capture_default_str();
+}
+
 void runAte(const EvalOptions& o) {
-  const auto r = eval::computeAte(readTrajectory(o.gt), readTrajectory(o.est), o.max_diff_s, o.gt, o.est,
+  const Trajectory est = eval::withTimeOffset(readTrajectory(o.est), o.offset_s);
+  const auto r = eval::computeAte(readTrajectory(o.gt), est, o.max_diff_s, o.gt, o.est,
                                   o.no_align ? eval::AteAlignment::None : eval::AteAlignment::Horn);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
@@ -61,7 +71,8 @@ void runAte(const EvalOptions& o) {
 }
 
 void runRpe(const EvalOptions& o) {
-  const auto r = eval::computeRpe(readTrajectory(o.gt), readTrajectory(o.est), o.delta_s, o.gt, o.est);
+  const Trajectory est = eval::withTimeOffset(readTrajectory(o.est), o.offset_s);
+  const auto r = eval::computeRpe(readTrajectory(o.gt), est, o.delta_s, o.gt, o.est);
   if (o.json) {
     std::cout << nlohmann::json(r).dump(2) << '\n';
     return;
@@ -195,6 +206,7 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
   ate->add_option("EST", opts->est, "estimated trajectory (TUM format)")->required();
   ate->add_option("--max-diff", opts->max_diff_s, "maximum timestamp difference for association, s")
       ->capture_default_str();
+  addOffsetOption(ate, opts->offset_s);
   ate->add_flag("--json", opts->json, "print the result as JSON");
   ate->add_flag("--no-align", opts->no_align,
                 "compare the poses as they stand, without the alignment (a run in the ground truth's frame, e.g. "
@@ -206,6 +218,7 @@ const RegisterCommand kRegister{"50-eval", [](CLI::App& app) {
   rpe->add_option("GT", opts->gt, "ground-truth trajectory (TUM format)")->required();
   rpe->add_option("EST", opts->est, "estimated trajectory (TUM format)")->required();
   rpe->add_option("--delta", opts->delta_s, "time between the poses of a pair, s")->capture_default_str();
+  addOffsetOption(rpe, opts->offset_s);
   rpe->add_flag("--json", opts->json, "print the result as JSON");
   rpe->callback([opts] { runRpe(*opts); });
 

@@ -96,7 +96,8 @@ std::string pythonWording(const std::string& message) {
   static const std::pair<const char*, const char*> kNames[] = {
       {"--delta", "delta"},          {"--max-diff", "max_diff"},       {"--frames", "frames"},
       {"--depth-scale", "depth_scale"}, {"--set", "Config.set"},       {"--config", "Config.load"},
-      {"--overwrite", "overwrite=True"}, {"--no-undistort", "undistort=False"}, {"--camera", "camera"}};
+      {"--overwrite", "overwrite=True"}, {"--no-undistort", "undistort=False"}, {"--camera", "camera"},
+      {"--offset", "offset"}};
   std::string out = message;
   for (const auto& [flag, name] : kNames) {
     const size_t n = std::strlen(flag);

@@ -22,13 +22,15 @@ std::string nameOf(const py::handle& object, const std::string& fallback) {
              : fallback;
 }
 
-py::object ate(const py::object& gt, const py::object& est, double max_diff) {
-  const Trajectory g = trajectoryFromObject(gt, "gt"), e = trajectoryFromObject(est, "est");
+py::object ate(const py::object& gt, const py::object& est, double max_diff, double offset) {
+  const Trajectory g = trajectoryFromObject(gt, "gt");
+  const Trajectory e = eval::withTimeOffset(trajectoryFromObject(est, "est"), offset);
   return pythonFromJson(eval::computeAte(g, e, max_diff, nameOf(gt, "gt"), nameOf(est, "est")));
 }
 
-py::object rpe(const py::object& gt, const py::object& est, double delta) {
-  const Trajectory g = trajectoryFromObject(gt, "gt"), e = trajectoryFromObject(est, "est");
+py::object rpe(const py::object& gt, const py::object& est, double delta, double offset) {
+  const Trajectory g = trajectoryFromObject(gt, "gt");
+  const Trajectory e = eval::withTimeOffset(trajectoryFromObject(est, "est"), offset);
   return pythonFromJson(eval::computeRpe(g, e, delta, nameOf(gt, "gt"), nameOf(est, "est")));
 }
 
@@ -100,12 +102,13 @@ py::dict run(const std::filesystem::path& sequence, const std::filesystem::path&
 
 void bindTools(py::module_& m) {
   py::module_ e = m.def_submodule("eval", "The metrics of `flowfusion eval`, as dicts like its --json output.");
-  e.def("ate", &ate, py::arg("gt"), py::arg("est"), py::arg("max_diff") = 0.02,
-        "ate(gt, est, max_diff=0.02) -> dict: absolute trajectory error as the TUM benchmark's evaluate_ate.py. "
-        "gt, est: Nx8 arrays (t tx ty tz qx qy qz qw) or TUM trajectory files.");
-  e.def("rpe", &rpe, py::arg("gt"), py::arg("est"), py::arg("delta") = 1.0,
-        "rpe(gt, est, delta=1.0) -> dict: relative pose error over delta seconds, as evaluate_rpe.py "
-        "--fixed_delta. gt, est: Nx8 arrays or TUM trajectory files.");
+  e.def("ate", &ate, py::arg("gt"), py::arg("est"), py::arg("max_diff") = 0.02, py::arg("offset") = 0.0,
+        "ate(gt, est, max_diff=0.02, offset=0.0) -> dict: absolute trajectory error as the TUM benchmark's "
+        "evaluate_ate.py. gt, est: Nx8 arrays (t tx ty tz qx qy qz qw) or TUM trajectory files; offset: seconds "
+        "added to est's timestamps first (the scripts' --offset).");
+  e.def("rpe", &rpe, py::arg("gt"), py::arg("est"), py::arg("delta") = 1.0, py::arg("offset") = 0.0,
+        "rpe(gt, est, delta=1.0, offset=0.0) -> dict: relative pose error over delta seconds, as evaluate_rpe.py "
+        "--fixed_delta. gt, est: Nx8 arrays or TUM trajectory files; offset: seconds added to est's timestamps.");
   e.def("seg", &seg, py::arg("gt_masks_dir"), py::arg("est_masks_dir"),
         "seg(gt_masks_dir, est_masks_dir) -> dict: IoU, precision and recall of dynamic masks "
         "(<timestamp>.png, > 127 = dynamic), per frame and pooled.");

@@ -188,6 +188,8 @@ def test_arguments_of_the_wrong_type_or_value_name_the_python_argument(system, s
      "delta: 100 s", "--delta"),
     (lambda s: ff.eval.ate(ff.TumSequence(s).groundtruth, ff.TumSequence(s).groundtruth, max_diff=-1.0),
      "max_diff: ", "--max-diff"),
+    (lambda s: ff.eval.ate(ff.TumSequence(s).groundtruth, ff.TumSequence(s).groundtruth, offset=float("nan")),
+     "offset: ", "--offset"),
     (lambda s: ff.TumSequence(s, depth_scale=1e9), "depth_scale: ", "--depth-scale"),
 ])
 def test_errors_name_python_arguments_not_command_line_flags(synth_seq, call, names, flag):

@@ -42,6 +42,12 @@ def test_eval_reads_saved_files(app, saved, synth_seq):
     assert ate["translation_m"]["rmse"] == pytest.approx(ate_app["translation_m"]["rmse"], abs=1e-6)
     assert ate["translation_m"]["rmse"] < 0.02  # a few millimetres on this short synthetic sequence
     assert ff.eval.ate(synth_seq / "groundtruth.txt", out / "trajectory.txt") == ate_app
+    # The TUM scripts' --offset: the estimate's stamps moved by 20 ms (the next ground-truth pose at 30 Hz),
+    # the same as the CLI's.
+    late_app = json.loads(run_app(app, "eval", "ate", synth_seq / "groundtruth.txt", out / "trajectory.txt",
+                                  "--offset", "0.02", "--json"))
+    assert ff.eval.ate(synth_seq / "groundtruth.txt", out / "trajectory.txt", offset=0.02) == late_app
+    assert late_app["translation_m"]["rmse"] != ate_app["translation_m"]["rmse"]
 
     rpe_app = json.loads(run_app(app, "eval", "rpe", synth_seq / "groundtruth.txt", out / "trajectory.txt",
                                  "--delta", "0.2", "--json"))

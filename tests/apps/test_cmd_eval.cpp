@@ -66,6 +66,13 @@ TEST(CmdEval, AtePrintsTheScriptsLines) {
   EXPECT_NEAR(parsed["translation_m"]["rmse"].get<double>(), expected.translation_m.rmse, 1e-12);
   // 4 ms offsets are within --max-diff 0.02 but not within 0.003.
   EXPECT_EQ(runFlowfusion("eval ate --max-diff 0.003 " + f.gt + " " + f.est).status, 2);
+  // --offset moves EST's stamps back onto GT's (as the scripts' --offset); not a number of seconds: refused.
+  const auto back = runFlowfusion("eval ate --max-diff 0.003 --offset -0.004 " + f.gt + " " + f.est);
+  ASSERT_EQ(back.status, 0) << back.output;
+  EXPECT_NEAR(valueAfter(back.output, "absolute_translational_error.rmse"), expected.translation_m.rmse, 1e-6);
+  const auto nan = runFlowfusion("eval ate --offset nan " + f.gt + " " + f.est);
+  EXPECT_EQ(nan.status, 2);
+  EXPECT_NE(nan.output.find("--offset"), std::string::npos) << nan.output;
 }
 
 TEST(CmdEval, AteWithoutAlignmentComparesThePosesAsTheyStand) {

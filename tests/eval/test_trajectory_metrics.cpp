@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "flowfusion/core/error.h"
@@ -114,6 +115,23 @@ TEST(Ate, GaussianPositionNoiseGivesSigmaSqrt3) {
   EXPECT_NEAR(r.translation_m.rmse, sigma * std::sqrt(3.0), 0.03 * sigma * std::sqrt(3.0));
   // The mean of a chi distribution with 3 dof: 2*sqrt(2/pi) sigma.
   EXPECT_NEAR(r.translation_m.mean, 2 * std::sqrt(2 / M_PI) * sigma, 0.03 * sigma);
+}
+
+// A camera stamped 20 ms late (on arrival): every 33rd pose of a 1 kHz ground truth, stamped 20 ms
+// after its time. Its ATE and RPE come back to zero with --offset -0.02, as the TUM scripts'.
+TEST(Ate, AnOffsetTakesACameraStampedLateBackToTheGroundTruthsClock) {
+  const Trajectory gt = wobblyTrajectory(6000, 0.001);
+  Trajectory late;
+  for (size_t k = 0; k < gt.size(); k += 33) late.push_back({gt[k].timestamp + 0.02, gt[k].T_world_cam});
+  EXPECT_GT(computeAte(gt, late).translation_m.rmse, 5e-4);
+  const Trajectory shifted = withTimeOffset(late, -0.02);
+  ASSERT_EQ(shifted.size(), late.size());
+  EXPECT_NEAR(shifted[5].timestamp, gt[5 * 33].timestamp, 1e-9);
+  const AteResult ate = computeAte(gt, shifted);
+  EXPECT_EQ(ate.matched_poses, late.size());
+  EXPECT_LT(ate.translation_m.rmse, 1e-9);
+  EXPECT_LT(computeRpe(gt, shifted, 1.0).translation_m.rmse, 1e-9);
+  EXPECT_THROW(withTimeOffset(late, std::numeric_limits<double>::quiet_NaN()), InputError);
 }
 
 TEST(Ate, TooFewMatchesOrNoOverlapIsInputError) {

@@ -101,6 +101,12 @@ void to_json(nlohmann::json& j, const RpeResult& r) {
        {"rotation_rmse_deg_per_s", r.rotation_rmse_deg_per_s}};
 }
 
+Trajectory withTimeOffset(Trajectory trajectory, double offset_s) {
+  if (!std::isfinite(offset_s)) throw InputError("--offset: must be a finite number of seconds");
+  for (StampedPose& p : trajectory) p.timestamp += offset_s;
+  return trajectory;
+}
+
 AteResult computeAte(const Trajectory& gt, const Trajectory& est, double max_diff_s, const std::string& gt_name,
                      const std::string& est_name, AteAlignment alignment) {
   if (!(max_diff_s > 0)) throw InputError("--max-diff: must be positive, got " + fmtShort(max_diff_s));

@@ -24,6 +24,12 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ErrorStats, rmse, mean, median, std, min, max
 std::vector<std::pair<size_t, size_t>> associateStamps(const std::vector<double>& a, const std::vector<double>& b,
                                                        double max_diff_s);
 
+// The trajectory with offset_s seconds added to every timestamp, as evaluate_ate.py and
+// evaluate_rpe.py --offset do to their second file: a camera whose stamps are out of step with the
+// ground truth's clock (TUM's Kinect frames are stamped on arrival) is compared at its own time.
+// Throws InputError (naming --offset) when offset_s is not finite.
+Trajectory withTimeOffset(Trajectory trajectory, double offset_s);
+
 struct AteResult {
   size_t matched_poses = 0;  // associated (GT, EST) pairs
   ErrorStats translation_m;  // per-pose distance between GT and aligned EST positions
