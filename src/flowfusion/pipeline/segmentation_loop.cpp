@@ -49,7 +49,8 @@ SegmentationLoop::SegmentationLoop(const SystemConfig& config, const CameraIntri
       flow_(makeOpticalFlow(config.flow)),
       clusterer_(makeClusterer(config.clustering)),
       memory_(config.scores.model_memory_s, seg_camera_),
-      past_views_(seg_camera_, config.scores.model_view_every_frames, config.scores.model_views) {}
+      past_views_(seg_camera_, config.scores.model_view_every_frames, config.scores.model_views),
+      held_movers_(config.scores.hold_seen_moving_s) {}
 
 cv::Mat SegmentationLoop::flowResidualAt(const FlowField& seg_flow, const OdometryFrame& cur,
                                          const SE3& T_prev_cur, bool camera_motion, const cv::Mat& movers) const {
@@ -286,6 +287,9 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
   if (!res.a_M.empty()) estimate.map_agreement = res.a_M > 0.5f;  // 1 agrees, 0 or NaN does not
   background_ = evidence.background;
   res.prior = carriedPrior(in, estimate);
+  const cv::Mat held = held_movers_.carried(in.previous.depthAt(level), in.previous.frame.timestamp, seg_camera_,
+                                            in.T_target_prev.inverse() * estimate.T_target_cur, seg_frame.depth,
+                                            in.frame.timestamp, res.a_M);
   res.memory = memory_.recall(in.target.T_world_target * estimate.T_target_cur, in.frame.timestamp);
   if (!estimate.flow_mover.empty()) {
     // The flow's own mover is a mover a priori; elsewhere the carried scores, if any.
@@ -323,6 +327,7 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
       scores = computeDynamicScores(graph, res, config_.scores);
       estimate.scores = pixelScores(graph, scores);
       if (estimate.flow_mover_holds) estimate.scores = cv::max(estimate.scores, estimate.flow_mover);
+      if (!held.empty()) estimate.scores = cv::max(estimate.scores, held);
     }
     StageTimer timer(timings, "odometry");
     const OdometryResult again =
@@ -337,9 +342,10 @@ void SegmentationLoop::scoreRounds(const SegmentationInput& in, const FlowField&
     if (done) break;
   }
   if (opt.cluster_log) estimate.cluster_log = clusterLog(graph, res, scores);
-  if (opt.mask_min_region > 0 && opt.mask_keep_flow_px > 0)
+  if (opt.mask_keep_flow_px > 0 && (opt.mask_min_region > 0 || held_movers_.enabled()))
     estimate.seen_moving =
         seenMovingClusters(graph, res, scores, opt.mask_keep_flow_px, opt.mask_keep_max_agreement);
+  if (!estimate.seen_moving.empty()) held_movers_.remember(held, estimate.seen_moving, in.frame.timestamp);
   const SE3 T_world_scored = in.target.T_world_target * estimate.T_target_cur;
   memory_.remember(graph, scores, seg_frame.depth, T_world_scored, in.frame.timestamp);
   past_views_.add(seg_frame.depth, estimate.scores, T_world_scored, in.frame.timestamp);

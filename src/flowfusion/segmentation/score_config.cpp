@@ -31,6 +31,8 @@ void validate(const ScoreConfig& c) {
   if (!(c.group_depth_ratio >= 0 && c.group_depth_ratio < 1)) throw InputError("scores.group_depth_ratio must be in [0, 1)");
   if (!(c.model_memory_s >= 0 && std::isfinite(c.model_memory_s)))
     throw InputError("scores.model_memory_s must be a finite number of seconds >= 0 (0 turns the memory off)");
+  if (!(c.hold_seen_moving_s >= 0 && std::isfinite(c.hold_seen_moving_s)))
+    throw InputError("scores.hold_seen_moving_s must be a finite number of seconds >= 0 (0 holds nothing)");
   if (!(c.long_baseline_frames >= 0 && c.long_baseline_frames <= 30))
     throw InputError("scores.long_baseline_frames must be in [0, 30] frames (0 turns the long baseline off)");
   if (!(c.long_baseline_max_turn_deg > 0 && c.long_baseline_max_turn_deg <= 180))

@@ -91,6 +91,12 @@ struct ScoreConfig {
   // a row is remembered, so a static surface flagged once is not, one flagged longer is released
   // after this time (MotionMemory, docs/tuning.md#model_memory_s).
   double model_memory_s = 2.0;
+  // Seconds (our extension; 0 = off): a mover once seen moving with a flow of its own off the
+  // static map (the clusters pipeline.mask_keep_flow_px and mask_keep_max_agreement keep) is held
+  // dynamic where it stands, the hold decaying over this time and let go where the depth shows it
+  // walked on or the pixel agrees with the map: a walker who stops, a person standing at the
+  // image's border (HeldMovers, docs/tuning.md#hold_seen_moving_s).
+  double hold_seen_moving_s = 1.0;
   // Past views (our extension; 0 = off): the model term is withheld at a pixel where one of the
   // last model_views scored frames (one of every model_view_every_frames) at least
   // model_view_min_age_s old saw a static surface at its point and none saw through it: a surface
@@ -160,7 +166,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ScoreConfig, alpha_I, alpha_F, t
                                                 body_smoothing, body_depth_ratio, group_depth_ratio, alpha_M, model_margin,
                                                 model_needs_motion, model_motion_delta, model_motion_cue, model_agreement,
                                                 agreement_margin, agreement_intensity, temporal_prior, restart_keeps_movers,
-                                                model_memory_s,
+                                                model_memory_s, hold_seen_moving_s,
                                                 model_views, model_view_every_frames, model_view_min_age_s,
                                                 target_mover_share, target_mover_margin_px, depth_offset_ms, depth_window_px,
                                                 flow_error_px, long_baseline_frames, long_baseline_max_turn_deg, long_baseline_noise_px,
