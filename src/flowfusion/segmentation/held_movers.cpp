@@ -9,7 +9,7 @@ namespace ff {
 cv::Mat HeldMovers::carried(const cv::Mat& previous_depth, double previous_timestamp, const CameraIntrinsics& camera,
                             const SE3& T_prev_cur, const cv::Mat& depth, double timestamp,
                             const cv::Mat& map_agreement) const {
-  if (!enabled() || hold_.empty() || timestamp_ != previous_timestamp) return {};
+  if (!enabled() || hold_.empty() || timestamp_ != previous_timestamp || map_agreement.empty()) return {};
   const SE3 T_cur_prev = T_prev_cur.inverse();
   cv::Mat hold = carryScores(hold_, previous_depth, camera, T_cur_prev, 0.f);
   const cv::Mat held_depth = carryScores(previous_depth, previous_depth, camera, T_cur_prev, 0.f);
@@ -22,8 +22,7 @@ cv::Mat HeldMovers::carried(const cv::Mat& previous_depth, double previous_times
       if (!(z[u] > 0) || !(z_held[u] > 0) || std::abs(z[u] - z_held[u]) > kLetGoFraction * z_held[u] + kLetGoMetres)
         h[u] = 0.f;
   }
-  if (map_agreement.empty()) return {};
-  cv::Mat compared_and_disagrees = map_agreement < 0.5f;  // false where NaN (nothing to compare with) or 1
+  const cv::Mat compared_and_disagrees = map_agreement < 0.5f;  // false where NaN (nothing to compare with) or 1
   hold.setTo(0.f, ~compared_and_disagrees);
   return hold;
 }
