@@ -134,6 +134,32 @@ TEST(FlowResidual, NaNWhereEgoFlowInvalidAndCoarseLevelsWork) {
   EXPECT_LT(medianOf(valuesWhere(r1, cv::Mat(), 0, 2)), 1e-3);
 }
 
+// A pixel without depth of its own, tried at the depths around it: a sideways camera move of 5 cm
+// gives 2.5 px of flow at 2 m and 5 px at 1 m (fx 100). Flow that one of the surfaces explains has
+// no residual; flow 6 px off both keeps at least the distance to the nearer of the two.
+TEST(SmallestFlowResidual, TakesTheDepthThatExplainsTheFlowBest) {
+  const CameraIntrinsics cam{100, 100, 39.5, 29.5, 80, 60};
+  SE3 T_b_a = SE3::Identity();
+  T_b_a.translation() = Eigen::Vector3d(0.05, 0, 0);
+  const cv::Mat far(60, 80, CV_32F, cv::Scalar(2.f)), near(60, 80, CV_32F, cv::Scalar(1.f));
+  FlowField flow{egoFlow(far, cam, T_b_a)};
+  egoFlow(near, cam, T_b_a)(cv::Rect(0, 0, 40, 60)).copyTo(flow.uv(cv::Rect(0, 0, 40, 60)));
+  cv::Mat own = flow.uv(cv::Rect(0, 40, 80, 20));
+  own += cv::Scalar(0.f, 6.f);  // rows 40-59 move down on their own
+  cv::Mat gap = near.clone();
+  gap(cv::Rect(0, 0, 10, 10)).setTo(0.f);
+  const cv::Mat r = smallestFlowResidual(flow, {far, gap}, cam, T_b_a);
+  EXPECT_NEAR(r.at<float>(20, 20), 0.f, 1e-4) << "the near surface explains it";
+  EXPECT_NEAR(r.at<float>(20, 60), 0.f, 1e-4) << "the far surface explains it";
+  EXPECT_NEAR(r.at<float>(5, 5), 2.5f, 1e-3) << "only the far depth is valid there";
+  EXPECT_GT(r.at<float>(50, 20), 6.f - 1e-3);
+  EXPECT_GT(r.at<float>(50, 60), 6.f - 1e-3);
+  const cv::Mat none(60, 80, CV_32F, cv::Scalar(0.f));
+  EXPECT_TRUE(std::isnan(smallestFlowResidual(flow, {none}, cam, T_b_a).at<float>(20, 20)));
+  EXPECT_THROW(smallestFlowResidual(flow, {}, cam, T_b_a), InputError);
+  EXPECT_THROW(smallestFlowResidual(flow, {cv::Mat(30, 40, CV_32F, cv::Scalar(1.f))}, cam, T_b_a), InputError);
+}
+
 // A static background seen with a smooth error field (a rotation error, a rolling shutter): the
 // optical flow is the ego flow plus an affine field of up to 1.3 px, and a box over a tenth of the
 // image moves 6 px more. With the field taken out the background's residual is gone and the box

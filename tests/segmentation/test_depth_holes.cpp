@@ -67,5 +67,93 @@ TEST(DepthHoles, RejectsMismatchedImagesAndShares) {
   EXPECT_THROW(fillDepthHoles(s.mask, s.depth, 1.5), InputError);
 }
 
+TEST(DepthAround, GivesTheNearestAndFarthestValidDepthWithinTheWindow) {
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.f));
+  depth(cv::Rect(30, 0, 10, 60)).setTo(1.f);
+  depth(cv::Rect(40, 10, 5, 5)).setTo(0.f);
+  const DepthAround around = depthAround(depth, 11);
+  EXPECT_FLOAT_EQ(around.nearest.at<float>(12, 42), 1.f);
+  EXPECT_FLOAT_EQ(around.farthest.at<float>(12, 42), 2.f);
+  EXPECT_FLOAT_EQ(around.nearest.at<float>(40, 70), 2.f);
+  const DepthAround nothing = depthAround(cv::Mat(60, 80, CV_32F, cv::Scalar(0.f)), 11);
+  EXPECT_EQ(cv::countNonZero(nothing.nearest), 0);
+  EXPECT_EQ(cv::countNonZero(nothing.farthest), 0);
+  EXPECT_THROW(depthAround(depth, 10), InputError);
+  EXPECT_THROW(depthAround(cv::Mat(60, 80, CV_16U), 11), InputError);
+}
+
+TEST(SensorBand, TakesTheEdgesLinesMostlyWithoutDepthUpToATenth) {
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.f));
+  depth(cv::Rect(68, 0, 12, 60)).setTo(0.f);  // the right 12 columns: a tenth is 8
+  depth.row(0).setTo(0.f);
+  depth(cv::Rect(0, 0, 1, 42)).setTo(0.f);  // the left column, 70 % without depth
+  depth(cv::Rect(40, 0, 1, 60)).setTo(0.f);  // a column inside the view is no band
+  const cv::Mat band = sensorBand(depth);
+  EXPECT_EQ(cv::countNonZero(band.col(0)), 60);
+  EXPECT_EQ(cv::countNonZero(band.row(0)), 80);
+  EXPECT_EQ(cv::countNonZero(band.col(72)), 60);
+  EXPECT_EQ(cv::countNonZero(band(cv::Rect(68, 1, 4, 59))), 0) << "past a tenth of the width";
+  EXPECT_EQ(cv::countNonZero(band(cv::Rect(40, 1, 1, 59))), 0);
+}
+
+// A 60 x 80 frame at 2 m with holes whose flow residual (were they static) is 8 px, grey 0.5.
+struct HoleScene {
+  cv::Mat depth = cv::Mat(60, 80, CV_32F, cv::Scalar(2.f));
+  cv::Mat intensity = cv::Mat(60, 80, CV_32F, cv::Scalar(0.5f));
+  cv::Mat residual = cv::Mat(60, 80, CV_32F, cv::Scalar(0.5f));
+  void hole(const cv::Rect& r, float residual_px = 8.f) {
+    depth(r).setTo(0.f);
+    residual(r).setTo(residual_px);
+  }
+};
+
+TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlowMoves) {
+  HoleScene s;
+  s.hole(cv::Rect(10, 10, 12, 12));                 // moves
+  s.hole(cv::Rect(30, 10, 12, 12));                 // black
+  s.intensity(cv::Rect(30, 10, 12, 12)).setTo(0.05f);
+  s.hole(cv::Rect(50, 10, 12, 12), 2.f);            // explained by a static depth
+  s.hole(cv::Rect(10, 35, 4, 20));                  // a spill 4 px wide
+  s.hole(cv::Rect(30, 35, 12, 12));                 // moves, half its flow inconsistent
+  cv::Mat inconsistent(60, 80, CV_8U, cv::Scalar(0));
+  inconsistent(cv::Rect(30, 35, 12, 6)).setTo(255);
+  s.hole(cv::Rect(72, 0, 8, 60));                   // the sensor's band
+  const cv::Mat holes = holesToTest(s.depth, s.intensity);
+  ASSERT_FALSE(holes.empty());
+  EXPECT_EQ(cv::countNonZero(holes), 3 * 144) << "the first, the third and the fifth";
+  EXPECT_EQ(cv::countNonZero(holes(cv::Rect(30, 10, 12, 12))), 0) << "a black screen";
+  EXPECT_EQ(cv::countNonZero(holes(cv::Rect(10, 35, 4, 20))), 0) << "narrower than the opening";
+  EXPECT_EQ(cv::countNonZero(holes(cv::Rect(72, 0, 8, 60))), 0) << "the band";
+  const cv::Mat moving = holesMovingOnTheirOwn(holes, s.residual, inconsistent, 4.0);
+  ASSERT_FALSE(moving.empty());
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(10, 10, 12, 12))), 144);
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(50, 10, 12, 12))), 0) << "explained";
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(30, 35, 12, 12))), 0) << "6 rows past the flow check: below 7";
+  EXPECT_EQ(cv::countNonZero(moving), 144);
+  EXPECT_TRUE(holesMovingOnTheirOwn(holes, s.residual, {}, 10.0).empty());
+  HoleScene white;
+  white.hole(cv::Rect(10, 10, 12, 12));
+  white.intensity.setTo(0.95f);
+  EXPECT_TRUE(holesToTest(white.depth, white.intensity).empty()) << "a window";
+  EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F)), InputError);
+  EXPECT_THROW(holesMovingOnTheirOwn(holes, cv::Mat(30, 40, CV_32F), {}, 4.0), InputError);
+}
+
+TEST(MovingHoles, MarksOnlyTheRegionsBesideAMover) {
+  cv::Mat mask(60, 80, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(10, 10, 10, 20)).setTo(255);
+  cv::Mat moving(60, 80, CV_8U, cv::Scalar(0));
+  moving(cv::Rect(20, 10, 8, 8)).setTo(255);  // touches the mover
+  moving(cv::Rect(12, 31, 8, 8)).setTo(255);  // 2 px below it
+  moving(cv::Rect(50, 10, 8, 8)).setTo(255);  // apart
+  markHolesBesideMovers(mask, moving);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(20, 10, 8, 8))), 64);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(12, 31, 8, 8))), 64);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(50, 10, 8, 8))), 0);
+  EXPECT_EQ(cv::countNonZero(mask), 200 + 128);
+  cv::Mat small(10, 10, CV_8U, cv::Scalar(0));
+  EXPECT_THROW(markHolesBesideMovers(small, moving), InputError);
+}
+
 }  // namespace
 }  // namespace ff

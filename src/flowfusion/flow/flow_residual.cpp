@@ -224,6 +224,20 @@ cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow) {
   return lengths(residualVectors(flow, ego_flow, "flowResidual"));
 }
 
+cv::Mat smallestFlowResidual(const FlowField& flow, const std::vector<cv::Mat>& depths,
+                             const CameraIntrinsics& camera, const SE3& T_cam_b_cam_a) {
+  if (depths.empty()) throw InputError("smallestFlowResidual: no depth to try");
+  cv::Mat smallest(camera.height, camera.width, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (const cv::Mat& depth : depths) {
+    if (depth.type() != CV_32FC1 || depth.cols != camera.width || depth.rows != camera.height)
+      throw InputError("smallestFlowResidual: every depth must be CV_32FC1 of the camera's size");
+    const cv::Mat r = flowResidual(flow, egoFlow(depth, camera, T_cam_b_cam_a));
+    // NaN compares false: a pixel takes r where r is finite and it has none yet or a larger one.
+    r.copyTo(smallest, (r == r) & ~(smallest <= r));
+  }
+  return smallest;
+}
+
 cv::Mat flowResidualWithoutAffine(const FlowField& flow, const cv::Mat& ego_flow, double scale_px) {
   if (!(scale_px > 0) || !std::isfinite(scale_px))
     throw InputError("flowResidualWithoutAffine: the fit's scale must be a finite number of pixels > 0");

@@ -23,6 +23,14 @@ cv::Mat egoFlow(const cv::Mat& depth_a, const CameraIntrinsics& camera, const SE
 // a coarse ego flow gives a coarse residual in that level's pixels.
 cv::Mat flowResidual(const FlowField& flow, const cv::Mat& ego_flow);
 
+// The flow residual of a pixel were it static at the best of several depths: per pixel the smallest
+// flowResidual over the ego flows of `depths` (CV_32FC1 each, of the camera's size; a depth that is
+// invalid there leaves the pixel to the others), NaN where none gives a residual. For a pixel whose
+// own depth is unknown (a hole in the sensor's depth): whether any of the surfaces around it would
+// move in the image as it does. Throws InputError on an empty list or a depth of another size.
+cv::Mat smallestFlowResidual(const FlowField& flow, const std::vector<cv::Mat>& depths,
+                             const CameraIntrinsics& camera, const SE3& T_cam_b_cam_a);
+
 // r_F with the frame's systematic part taken out: an affine field c + A x, fitted to the residual
 // vectors (optical flow - ego flow) of the valid pixels on a 4-pixel grid by a Cauchy IRLS of scale
 // scale_px from the zero field (6 iterations), is subtracted before the length is taken. A small error of the

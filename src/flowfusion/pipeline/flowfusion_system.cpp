@@ -165,6 +165,12 @@ void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedSc
   if (!tracked.seen_moving.empty()) cv::resize(tracked.seen_moving, keep, mask.size(), 0, 0, cv::INTER_NEAREST);
   dropSmallInteriorRegions(mask, opt.mask_min_region, keep);
   if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share);
+  if (!tracked.moving_holes.empty()) {
+    cv::Mat moving;
+    cv::resize(tracked.moving_holes, moving, mask.size(), 0, 0, cv::INTER_NEAREST);
+    moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
+    markHolesBesideMovers(mask, moving);
+  }
 }
 
 FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur,
@@ -204,7 +210,8 @@ FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, 
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
   velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
-  return {estimate.scores, estimate.map_agreement, estimate.seen_moving, std::move(estimate.cluster_log)};
+  return {estimate.scores, estimate.map_agreement, estimate.seen_moving, estimate.moving_holes,
+          std::move(estimate.cluster_log)};
 }
 
 MotionEstimate FlowFusionSystem::firstOdometry(const OdometryFrame& cur, TrackingTarget& target, SE3& T_target_prev,

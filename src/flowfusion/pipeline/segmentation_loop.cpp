@@ -8,6 +8,7 @@
 
 #include "flowfusion/flow/flow_motion.h"
 #include "flowfusion/flow/flow_residual.h"
+#include "flowfusion/segmentation/depth_holes.h"
 #include "flowfusion/segmentation/dynamic_score.h"
 #include "flowfusion/segmentation/score_carry.h"
 #include "flowfusion/segmentation/score_evidence.h"
@@ -73,6 +74,28 @@ cv::Mat SegmentationLoop::inconsistentAt(const FrameCues& cues, const FlowField&
   return inconsistentFlow(seg_flow, resizeFlow(cues.flow_back, seg_flow.uv.size()), tolerance_px);
 }
 
+cv::Mat SegmentationLoop::movingHoles(const FlowField& seg_flow, const SegmentationInput& in,
+                                      const MotionEstimate& estimate, const cv::Mat& flow_inconsistent) const {
+  const double min_flow_px = config_.pipeline.mask_hole_flow_px;
+  // Without a mover the written mask has nothing for a hole to lie beside.
+  if (min_flow_px <= 0 || estimate.scores.empty() ||
+      cv::countNonZero(estimate.scores > config_.pipeline.mask_threshold) == 0)
+    return {};
+  const int level = config_.pipeline.segmentation_level;
+  const cv::Mat& depth = in.cur.level(level).depth;
+  const cv::Mat holes = holesToTest(depth, in.cur.level(level).intensity);
+  if (holes.empty()) return {};
+  // What may lie in a hole: the surfaces around it, near and far, and the stable map's.
+  const DepthAround around = depthAround(depth, (depth.cols / kHoleWindowFraction) | 1);
+  std::vector<cv::Mat> depths{around.nearest, around.farthest};
+  if (!background_.empty()) depths.push_back(background_);
+  const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
+  const cv::Mat r_static = relativeToFrameError(
+      smallestFlowResidual(seg_flow, depths, seg_camera_, T_prev_cur) * std::ldexp(1.0, level),
+      config_.scores.flow_error_px);
+  return holesMovingOnTheirOwn(holes, r_static, flow_inconsistent, min_flow_px);
+}
+
 RgbdFrame SegmentationLoop::segmentationFrame(const RgbdFrame& frame, const OdometryFrame& cur) const {
   const int level = config_.pipeline.segmentation_level;
   RgbdFrame seg_frame;
@@ -106,7 +129,10 @@ void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, M
     StageTimer timer(timings, "flow");
     const FlowField seg_long_flow = longBaselineFlow(seg_flow, in, estimate);
     timer.stop();
-    scoreRounds(in, seg_flow, seg_long_flow, inconsistentAt(cues, seg_flow), cues.graph, estimate, timings);
+    const cv::Mat inconsistent = inconsistentAt(cues, seg_flow);
+    scoreRounds(in, seg_flow, seg_long_flow, inconsistent, cues.graph, estimate, timings);
+    StageTimer holes_timer(timings, "scores");
+    estimate.moving_holes = movingHoles(seg_flow, in, estimate, inconsistent);
   }
   keepForLongBaseline(in, seg_flow, estimate);
 }

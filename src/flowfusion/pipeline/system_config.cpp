@@ -26,6 +26,8 @@ void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
   if (!(p.mask_threshold > 0 && p.mask_threshold < 1)) throw InputError("pipeline.mask_threshold must be in (0, 1)");
   if (!(p.mask_hole_share >= 0 && p.mask_hole_share <= 1))
     throw InputError("pipeline.mask_hole_share must be 0 (never) to 1 (a share of the hole's neighbours)");
+  if (!(p.mask_hole_flow_px >= 0 && std::isfinite(p.mask_hole_flow_px)))
+    throw InputError("pipeline.mask_hole_flow_px must be a finite number of pixels >= 0 (0: never)");
   if (!(p.mask_min_region >= 0 && p.mask_min_region < 1))
     throw InputError("pipeline.mask_min_region must be 0 (keep every region) or a share of the image below 1");
   if (!(p.mask_keep_flow_px >= 0 && p.mask_keep_flow_px <= 1e4))

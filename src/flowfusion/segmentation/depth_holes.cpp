@@ -1,5 +1,7 @@
 #include "flowfusion/segmentation/depth_holes.h"
 
+#include <algorithm>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -53,6 +55,88 @@ void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_shar
     any = any || fill[r];
   }
   if (any) setChosenRegions(mask, regions, fill, 255);
+}
+
+DepthAround depthAround(const cv::Mat& depth, int window_px) {
+  if (depth.type() != CV_32FC1) throw InputError("depthAround: the depth must be CV_32FC1");
+  if (window_px < 3 || window_px % 2 == 0) throw InputError("depthAround: the window must be odd and >= 3 pixels");
+  const cv::Mat has_depth = depth > 0.f;  // false for NaN too
+  constexpr float kNone = std::numeric_limits<float>::max();
+  cv::Mat valid(depth.size(), CV_32F, cv::Scalar(0.f)), nearest_in(depth.size(), CV_32F, cv::Scalar(kNone));
+  depth.copyTo(valid, has_depth);
+  depth.copyTo(nearest_in, has_depth);
+  const cv::Mat square = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(window_px, window_px));
+  DepthAround around;
+  cv::dilate(valid, around.farthest, square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0.f));
+  cv::erode(nearest_in, around.nearest, square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kNone));
+  around.nearest.setTo(0.f, around.nearest == kNone);
+  return around;
+}
+
+cv::Mat sensorBand(const cv::Mat& depth) {
+  if (depth.type() != CV_32FC1) throw InputError("sensorBand: the depth must be CV_32FC1");
+  cv::Mat without;
+  cv::Mat(~(depth > 0.f)).convertTo(without, CV_32F, 1.0 / 255);
+  cv::Mat row_share, col_share;
+  cv::reduce(without, row_share, 1, cv::REDUCE_AVG);  // rows x 1
+  cv::reduce(without, col_share, 0, cv::REDUCE_AVG);  // 1 x cols
+  cv::Mat band(depth.size(), CV_8U, cv::Scalar(0));
+  const auto lines = [&](const cv::Mat& share, int n, bool rows) {
+    const int most = n / kBandMaxFraction;
+    for (int i = 0; i < most && share.at<float>(i) >= kBandMinShare; ++i)
+      (rows ? band.row(i) : band.col(i)).setTo(255);
+    for (int i = n - 1; i >= n - most && share.at<float>(i) >= kBandMinShare; --i)
+      (rows ? band.row(i) : band.col(i)).setTo(255);
+  };
+  lines(row_share, depth.rows, true);
+  lines(col_share, depth.cols, false);
+  return band;
+}
+
+namespace {
+
+// Opened by a kHoleMinWidthPx square, or empty when nothing is left.
+cv::Mat openedOrEmpty(cv::Mat pixels) {
+  const cv::Mat square = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(kHoleMinWidthPx, kHoleMinWidthPx));
+  cv::morphologyEx(pixels, pixels, cv::MORPH_OPEN, square);
+  return cv::countNonZero(pixels) ? pixels : cv::Mat();
+}
+
+}  // namespace
+
+cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity) {
+  if (depth.type() != CV_32FC1 || intensity.type() != CV_32FC1 || intensity.size() != depth.size())
+    throw InputError("holesToTest: the depth and the intensity must be CV_32FC1 of one size");
+  cv::Mat holes = ~(depth > 0.f) & (intensity >= kHoleMinIntensity) & (intensity <= kHoleMaxIntensity);
+  holes.setTo(0, sensorBand(depth));
+  return openedOrEmpty(holes);
+}
+
+cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residual_px, const cv::Mat& flow_inconsistent,
+                              double min_flow_px) {
+  if (holes.type() != CV_8UC1 || static_residual_px.type() != CV_32FC1 || static_residual_px.size() != holes.size() ||
+      (!flow_inconsistent.empty() && (flow_inconsistent.type() != CV_8UC1 || flow_inconsistent.size() != holes.size())))
+    throw InputError("holesMovingOnTheirOwn: the residual (CV_32F) and the flow check (CV_8U) must be of the holes' size");
+  cv::Mat moving = holes & (static_residual_px > min_flow_px);
+  if (!flow_inconsistent.empty()) moving.setTo(0, flow_inconsistent);
+  return openedOrEmpty(moving);
+}
+
+void markHolesBesideMovers(cv::Mat& mask, const cv::Mat& moving_holes) {
+  if (mask.type() != CV_8UC1 || moving_holes.type() != CV_8UC1 || moving_holes.size() != mask.size())
+    throw InputError("markHolesBesideMovers: the mask and the moving holes must be CV_8UC1 of one size");
+  cv::Mat near_movers;
+  cv::dilate(mask != 0, near_movers, cv::Mat(), cv::Point(-1, -1), 2);
+  cv::Mat regions;
+  const int n = cv::connectedComponents(moving_holes, regions, 8, CV_32S);
+  std::vector<uchar> beside(n, 0);
+  for (int v = 0; v < regions.rows; ++v) {
+    const int* l = regions.ptr<int>(v);
+    const uchar* m = near_movers.ptr<uchar>(v);
+    for (int u = 0; u < regions.cols; ++u)
+      if (m[u] && l[u] > 0) beside[l[u]] = 1;
+  }
+  setChosenRegions(mask, regions, beside, 255);
 }
 
 }  // namespace ff

@@ -4,7 +4,8 @@
 // range (a hand, a box held up to the camera) or where its surface is dark or shiny, and the mask
 // then shows the mover with a hole where most of it is. A hole becomes dynamic when most of the
 // valid pixels around it are; a hole beside a mover (the shadow of its edge, a black screen behind
-// it) borders the static world as much and keeps the label the scores gave it.
+// it) borders the static world as much and keeps the label the scores gave it. A hole whose own
+// image motion no static surface around it explains, beside a mover, is the mover's (movingHoles).
 #include <opencv2/core.hpp>
 
 namespace ff {
@@ -14,5 +15,44 @@ namespace ff {
 // of its 4-neighbours with depth are dynamic there; the image border is no neighbour. Other pixels
 // keep their label. Throws InputError on mismatched sizes or types or a share outside (0, 1].
 void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_share);
+
+// The nearest and the farthest valid depth within a window_px x window_px square around each pixel
+// of `depth` (CV_32F, metres), 0 where the square has none: what may lie at a pixel without depth,
+// from the surfaces around it. window_px odd, >= 3.
+struct DepthAround {
+  cv::Mat nearest, farthest;  // CV_32F, depth's size
+};
+DepthAround depthAround(const cv::Mat& depth, int window_px);
+
+// The sensor's invalid band (CV_8U, 255): the rows and columns from each edge inward, up to a
+// tenth of the image, of which at least kBandMinShare lack depth (TUM fr1: a dozen columns at the
+// right, a few rows at the top, more where a near surface widens it). A mover drawn there by
+// `augment` keeps its depth, hence a share below 0.9.
+cv::Mat sensorBand(const cv::Mat& depth);
+constexpr float kBandMinShare = 0.6f;
+constexpr int kBandMaxFraction = 10;
+
+// The pixels without depth whose own motion can tell (CV_8U, 255; empty when none): off the
+// sensor's band and on surfaces neither black nor white in `intensity` (CV_32F, [0, 1], depth's
+// size; a black screen's or a window's flow is filled in from around it and means nothing), in
+// regions at least kHoleMinWidthPx wide (the flow's spill over a mover's edge is narrower).
+cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity);
+constexpr float kHoleMinIntensity = 0.1f;
+constexpr float kHoleMaxIntensity = 0.9f;
+constexpr int kHoleMinWidthPx = 7;
+
+// Those of `holes` (holesToTest's) that move on their own (CV_8U, 255; empty when none): where
+// `static_residual_px` (CV_32F of their size: the flow residual were the pixel static at the best
+// depth around it, smallestFlowResidual; NaN unknown) exceeds min_flow_px and `flow_inconsistent`
+// (CV_8U, optional) does not hold, in regions at least kHoleMinWidthPx wide.
+cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residual_px, const cv::Mat& flow_inconsistent,
+                              double min_flow_px);
+
+// Marks (255) in `mask` (CV_8U, > 0 = dynamic) the 8-connected regions of `moving_holes` (CV_8U, the
+// mask's size; holesMovingOnTheirOwn's) that touch a marked pixel or lie within 2 pixels of one. A
+// box held nearer than the sensor's range moves with its own sides that have depth; a black
+// screen's or a window's hole, whose flow is filled in from the static frame around it, and the
+// sensor's invalid bands lie beside no mover.
+void markHolesBesideMovers(cv::Mat& mask, const cv::Mat& moving_holes);
 
 }  // namespace ff
