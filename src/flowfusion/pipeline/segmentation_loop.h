@@ -37,8 +37,9 @@ struct MotionEstimate {
   // 255 on the clusters seen moving with a flow of their own (seenMovingClusters), whose small
   // regions the written mask keeps, at the segmentation level; empty when none or the rule is off
   cv::Mat seen_moving;
-  // 255 on the pixels without depth whose flow no static surface around them explains, beside a
-  // mover (movingHoles, pipeline.mask_hole_flow_px), at the segmentation level; empty when none
+  // 255 on the pixels without depth whose flow no static surface around them explains (movingHoles,
+  // pipeline.mask_hole_flow_px), at the segmentation level; the written mask takes those beside its
+  // movers. Empty when none
   cv::Mat moving_holes;
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
@@ -86,7 +87,7 @@ class SegmentationLoop {
                          bool camera_motion, const cv::Mat& movers = {}) const;
   // 255 where the flow fails scores.flow_consistency_px's check (segmentation level); empty when off.
   cv::Mat inconsistentAt(const FrameCues& cues, const FlowField& seg_flow) const;
-  // The pixels without depth that move with a mover (MotionEstimate::moving_holes), after the rounds.
+  // The pixels without depth that move on their own (MotionEstimate::moving_holes), after the rounds.
   cv::Mat movingHoles(const FlowField& seg_flow, const SegmentationInput& in, const MotionEstimate& estimate,
                       const cv::Mat& flow_inconsistent) const;
   // The surfaces around a hole are looked for within a square of 1/kHoleWindowFraction of the width.
