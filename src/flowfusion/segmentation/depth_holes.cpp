@@ -129,13 +129,9 @@ void markHolesBesideMovers(cv::Mat& mask, const cv::Mat& moving_holes) {
   cv::dilate(mask != 0, near_movers, cv::Mat(), cv::Point(-1, -1), 2);
   cv::Mat regions;
   const int n = cv::connectedComponents(moving_holes, regions, 8, CV_32S);
+  const std::vector<int> near = pixelsPerRegionWhere(regions, n, near_movers);
   std::vector<uchar> beside(n, 0);
-  for (int v = 0; v < regions.rows; ++v) {
-    const int* l = regions.ptr<int>(v);
-    const uchar* m = near_movers.ptr<uchar>(v);
-    for (int u = 0; u < regions.cols; ++u)
-      if (m[u] && l[u] > 0) beside[l[u]] = 1;
-  }
+  for (int r = 1; r < n; ++r) beside[r] = near[r] > 0;
   setChosenRegions(mask, regions, beside, 255);
 }
 

@@ -9,23 +9,6 @@
 
 namespace ff {
 
-namespace {
-
-// Per region of `regions` (labels 0..n-1), how many of its pixels are non-zero in `keep`.
-std::vector<int> keptPixels(const cv::Mat& regions, int n, const cv::Mat& keep) {
-  std::vector<int> kept(n, 0);
-  if (keep.empty()) return kept;
-  for (int v = 0; v < regions.rows; ++v) {
-    const int* r = regions.ptr<int>(v);
-    const uchar* k = keep.ptr<uchar>(v);
-    for (int u = 0; u < regions.cols; ++u)
-      if (r[u] > 0 && k[u]) ++kept[r[u]];
-  }
-  return kept;
-}
-
-}  // namespace
-
 void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share, const cv::Mat& keep) {
   if (mask.empty() || mask.type() != CV_8UC1)
     throw InputError("dropSmallInteriorRegions: the mask must be a non-empty CV_8UC1 image");
@@ -37,7 +20,7 @@ void dropSmallInteriorRegions(cv::Mat& mask, double min_area_share, const cv::Ma
   cv::Mat regions, stats, centroids;
   const int n = cv::connectedComponentsWithStats(mask > 0, regions, stats, centroids, 8, CV_32S);
   const double min_area = min_area_share * static_cast<double>(mask.total());
-  const std::vector<int> kept = keptPixels(regions, n, keep);
+  const std::vector<int> kept = pixelsPerRegionWhere(regions, n, keep);
   std::vector<uchar> drop(n, 0);
   bool any = false;
   for (int r = 1; r < n; ++r) {
