@@ -28,6 +28,8 @@ void validate(const ConsensusConfig& c) {
     throw InputError("consensus.map_role_margin must be in (0, 1]");
   if (!(c.start_min_separation >= 0 && std::isfinite(c.start_min_separation)))
     throw InputError("consensus.start_min_separation must be a finite share >= 0 of the image motion");
+  if (!(c.start_max_black_share >= 0 && c.start_max_black_share <= 1))
+    throw InputError("consensus.start_max_black_share must be a share in [0, 1]");
 }
 
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
@@ -314,12 +316,31 @@ double moverSeparationShare(const FlowMotionSplit& split, const FlowCorresponden
   return motion_px > kStill_px ? median(separation) / motion_px : std::numeric_limits<double>::infinity();
 }
 
+double moverGroupShareWhere(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                            const cv::Mat& where_a) {
+  if (where_a.type() != CV_8UC1 || where_a.cols != camera.width || where_a.rows != camera.height)
+    throw InputError("moverGroupShareWhere: the mask must be CV_8U at the camera's size");
+  size_t group = 0, there = 0;
+  for (size_t k = 0; k < c.size() && k < split.group.size(); ++k) {
+    if (split.group[k] != FlowMotionSplit::kMover) continue;
+    ++group;
+    const Eigen::Vector2d uv = camera.project(Eigen::Vector3d(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z));
+    const int u = std::clamp(static_cast<int>(std::lround(uv.x())), 0, where_a.cols - 1);
+    const int v = std::clamp(static_cast<int>(std::lround(uv.y())), 0, where_a.rows - 1);
+    if (where_a.at<uchar>(v, u)) ++there;
+  }
+  return group ? static_cast<double>(there) / static_cast<double>(group) : 0.0;
+}
+
 bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                     const ConsensusConfig& config) {
-  return !split.group.empty() &&
-         static_cast<double>(groupSize(split, FlowMotionSplit::kMover)) >=
-             config.min_mover_share * static_cast<double>(split.group.size()) &&
-         moverSeparationShare(split, c, camera) >= config.start_min_separation;
+                     const ConsensusConfig& config, const cv::Mat& intensity_a) {
+  if (split.group.empty() || static_cast<double>(groupSize(split, FlowMotionSplit::kMover)) <
+                                 config.min_mover_share * static_cast<double>(split.group.size()))
+    return false;
+  if (moverSeparationShare(split, c, camera) < config.start_min_separation) return false;
+  if (intensity_a.empty() || config.start_max_black_share >= 1) return true;
+  const double black = moverGroupShareWhere(split, c, camera, intensity_a < kBlackGrey);
+  return black <= config.start_max_black_share;
 }
 
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,

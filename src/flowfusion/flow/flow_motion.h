@@ -52,10 +52,17 @@ struct ConsensusConfig {
   // colour-depth offset, rolling shutter) make a second motion within that share under fast
   // rotation (docs/tuning.md#start_min_separation). 0 = any.
   double start_min_separation = 0.15;
+  // And only when at most this share of its samples lie on black pixels (grey below kBlackGrey): a
+  // black screen's flow follows its reflections and what the flow fills in from around it, a second
+  // motion no mover makes (docs/tuning.md#start_max_black_share). 1 = any.
+  double start_max_black_share = 0.6;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
-                                                map_role_margin, start_min_separation)
+                                                map_role_margin, start_min_separation, start_max_black_share)
+
+// Grey level (of [0, 1]) below which a pixel counts as black for start_max_black_share.
+constexpr float kBlackGrey = 0.1f;
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -118,12 +125,19 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
 // without a mover group.
 double moverSeparationShare(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera);
 
+// The share of the mover group's samples whose pixel in A lies where `where_a` (CV_8U, the camera's
+// size, > 0) is set; 0 without a mover group.
+double moverGroupShareWhere(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
+                            const cv::Mat& where_a);
+
 // Whether the split's mover group (the samples its motion explains better) holds at least
-// min_mover_share of the samples and lies start_min_separation apart (moverSeparationShare): at the
-// start, before any scores, the best guess of the movers, even where their motion is too close to
-// the background's for samples of their own, but not within the flow's own error.
+// min_mover_share of the samples, lies start_min_separation apart (moverSeparationShare) and not
+// more than start_max_black_share of it on black pixels of `intensity_a` (A's grey levels, CV_32F,
+// the camera's size; empty: not tested): at the start, before any scores, the best guess of the
+// movers, even where their motion is too close to the background's for samples of their own, but
+// not within the flow's own error nor on a black screen.
 bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                     const ConsensusConfig& config);
+                     const ConsensusConfig& config, const cv::Mat& intensity_a = {});
 
 // Whether the odometry's motion T_b_a_odometry is to restart from the split's background motion:
 // it explains the mover's own flow (min_captured of the mover's own samples not on the static map,

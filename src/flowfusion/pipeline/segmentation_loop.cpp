@@ -201,7 +201,7 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
     }
   }
   if (!split) return;
-  const bool start_movers = start && showsMoverGroup(*split, samples, camera_, config_.consensus);
+  const bool start_movers = start && showsMoverGroup(*split, samples, camera_, config_.consensus, in.frame.intensity);
   const bool shows_mover = start_movers || showsMover(*split, samples, config_.consensus);
   const bool misled = start_movers || misledOdometry(samples, camera_, *split, T_prev_cur, config_.consensus, relation);
   if (!shows_mover && !misled) return;
