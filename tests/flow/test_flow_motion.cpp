@@ -202,28 +202,31 @@ TEST(FlowMotion, AStartMoverGroupMustLieApartBeyondTheFlowsErrorAtThatImageMotio
   EXPECT_TRUE(showsMoverGroup(fast.split, fast.c, fast.camera, any));
 }
 
-// A slowly turning camera's mover group (the band of rows of TurningSplit) whose samples lie on a
-// black screen over the columns left of `black_until_u`, grey elsewhere: the black share is the
-// share of its columns (the samples lie every 16 px from u = 8).
+// A slowly turning camera's mover group (the band of rows of TurningSplit, v < 96) whose samples lie
+// on a black screen over the columns left of `black_until_u`, grey elsewhere: the black share is
+// the share of its columns (the samples lie every 16 px from u = 8), the frame's a fifth of that.
 TEST(FlowMotion, AStartMoverGroupMostlyOnBlackPixelsIsNoMover) {
   const ConsensusConfig cfg;  // start_max_black_share 0.6
   const TurningSplit slow(0.5, 0.25);
   const auto intensity = [&](int black_until_u) {
     cv::Mat grey(slow.camera.height, slow.camera.width, CV_32F, cv::Scalar(0.5));
-    grey(cv::Rect(0, 0, black_until_u, slow.camera.height)).setTo(0.02);
+    grey(cv::Rect(0, 0, black_until_u, slow.camera.height / 5)).setTo(0.02);
     return grey;
   };
   const cv::Mat screen = intensity(448), corner = intensity(256);  // 28 and 16 of the 40 columns
-  EXPECT_NEAR(moverGroupShareWhere(slow.split, slow.c, slow.camera, screen < kBlackGrey), 0.7, 1e-9);
-  EXPECT_NEAR(moverGroupShareWhere(slow.split, slow.c, slow.camera, corner < kBlackGrey), 0.4, 1e-9);
+  EXPECT_NEAR(samplesShareWhere(slow.c, slow.camera, screen < kBlackGrey, &slow.split), 0.7, 1e-9);
+  EXPECT_NEAR(samplesShareWhere(slow.c, slow.camera, screen < kBlackGrey), 0.7 / 5, 1e-9);
+  EXPECT_NEAR(samplesShareWhere(slow.c, slow.camera, corner < kBlackGrey, &slow.split), 0.4, 1e-9);
   EXPECT_FALSE(showsMoverGroup(slow.split, slow.c, slow.camera, cfg, screen));
   EXPECT_TRUE(showsMoverGroup(slow.split, slow.c, slow.camera, cfg, corner));
   EXPECT_TRUE(showsMoverGroup(slow.split, slow.c, slow.camera, cfg));  // no image: not tested
   ConsensusConfig any = cfg;
   any.start_max_black_share = 1;
   EXPECT_TRUE(showsMoverGroup(slow.split, slow.c, slow.camera, any, screen));
-  EXPECT_THROW(moverGroupShareWhere(slow.split, slow.c, slow.camera, cv::Mat(10, 10, CV_8U, cv::Scalar(0))),
-               InputError);
+  // A dim room, every sample black: black says nothing of a screen there.
+  const cv::Mat dim(slow.camera.height, slow.camera.width, CV_32F, cv::Scalar(0.05));
+  EXPECT_TRUE(showsMoverGroup(slow.split, slow.c, slow.camera, cfg, dim));
+  EXPECT_THROW(samplesShareWhere(slow.c, slow.camera, cv::Mat(10, 10, CV_8U, cv::Scalar(0))), InputError);
 }
 
 TEST(FlowMotion, TooFewSamplesGiveNoSplit) {

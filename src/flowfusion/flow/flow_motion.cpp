@@ -316,20 +316,22 @@ double moverSeparationShare(const FlowMotionSplit& split, const FlowCorresponden
   return motion_px > kStill_px ? median(separation) / motion_px : std::numeric_limits<double>::infinity();
 }
 
-double moverGroupShareWhere(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                            const cv::Mat& where_a) {
+double samplesShareWhere(const FlowCorrespondences& c, const CameraIntrinsics& camera, const cv::Mat& where_a,
+                         const FlowMotionSplit* mover_group_of) {
   if (where_a.type() != CV_8UC1 || where_a.cols != camera.width || where_a.rows != camera.height)
-    throw InputError("moverGroupShareWhere: the mask must be CV_8U at the camera's size");
-  size_t group = 0, there = 0;
-  for (size_t k = 0; k < c.size() && k < split.group.size(); ++k) {
-    if (split.group[k] != FlowMotionSplit::kMover) continue;
-    ++group;
+    throw InputError("samplesShareWhere: the mask must be CV_8U at the camera's size");
+  size_t counted = 0, there = 0;
+  for (size_t k = 0; k < c.size(); ++k) {
+    if (mover_group_of &&
+        (k >= mover_group_of->group.size() || mover_group_of->group[k] != FlowMotionSplit::kMover))
+      continue;
+    ++counted;
     const Eigen::Vector2d uv = camera.project(Eigen::Vector3d(c.points_a[k].x, c.points_a[k].y, c.points_a[k].z));
     const int u = std::clamp(static_cast<int>(std::lround(uv.x())), 0, where_a.cols - 1);
     const int v = std::clamp(static_cast<int>(std::lround(uv.y())), 0, where_a.rows - 1);
     if (where_a.at<uchar>(v, u)) ++there;
   }
-  return group ? static_cast<double>(there) / static_cast<double>(group) : 0.0;
+  return counted ? static_cast<double>(there) / static_cast<double>(counted) : 0.0;
 }
 
 bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
@@ -339,8 +341,9 @@ bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c,
     return false;
   if (moverSeparationShare(split, c, camera) < config.start_min_separation) return false;
   if (intensity_a.empty() || config.start_max_black_share >= 1) return true;
-  const double black = moverGroupShareWhere(split, c, camera, intensity_a < kBlackGrey);
-  return black <= config.start_max_black_share;
+  const cv::Mat black = intensity_a < kBlackGrey;
+  if (samplesShareWhere(c, camera, black) >= kMostlyBlackFrame) return true;
+  return samplesShareWhere(c, camera, black, &split) <= config.start_max_black_share;
 }
 
 bool misledOdometry(const FlowCorrespondences& c, const CameraIntrinsics& camera, const FlowMotionSplit& split,

@@ -63,6 +63,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_s
 
 // Grey level (of [0, 1]) below which a pixel counts as black for start_max_black_share.
 constexpr float kBlackGrey = 0.1f;
+// When at least this share of all the samples is black, the image is dim rather than a screen
+// in a lit room, and start_max_black_share is not applied.
+constexpr double kMostlyBlackFrame = 0.5;
 // Throws InputError naming the first bad setting.
 void validate(const ConsensusConfig& config);
 
@@ -125,17 +128,18 @@ bool showsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, cons
 // without a mover group.
 double moverSeparationShare(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera);
 
-// The share of the mover group's samples whose pixel in A lies where `where_a` (CV_8U, the camera's
-// size, > 0) is set; 0 without a mover group.
-double moverGroupShareWhere(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
-                            const cv::Mat& where_a);
+// The share of the samples (only those of `mover_group_of`'s mover group when given) whose pixel in
+// A lies where `where_a` (CV_8U, the camera's size, > 0) is set; 0 when there are none.
+double samplesShareWhere(const FlowCorrespondences& c, const CameraIntrinsics& camera, const cv::Mat& where_a,
+                         const FlowMotionSplit* mover_group_of = nullptr);
 
 // Whether the split's mover group (the samples its motion explains better) holds at least
 // min_mover_share of the samples, lies start_min_separation apart (moverSeparationShare) and not
 // more than start_max_black_share of it on black pixels of `intensity_a` (A's grey levels, CV_32F,
-// the camera's size; empty: not tested): at the start, before any scores, the best guess of the
-// movers, even where their motion is too close to the background's for samples of their own, but
-// not within the flow's own error nor on a black screen.
+// the camera's size; empty: not tested; not tested in a dim image either, kMostlyBlackFrame): at
+// the start, before any scores, the best guess of the movers, even where their motion is too close
+// to the background's for samples of their own, but not within the flow's own error nor on a black
+// screen.
 bool showsMoverGroup(const FlowMotionSplit& split, const FlowCorrespondences& c, const CameraIntrinsics& camera,
                      const ConsensusConfig& config, const cv::Mat& intensity_a = {});
 
