@@ -23,6 +23,12 @@ struct RgbdFrame {
   int height() const { return depth.rows; }
 };
 
+// Grey level (of `intensity`) below which a pixel is black: on a black screen the optical flow is
+// filled in from around it or follows reflections, and tells nothing of the surface's own motion
+// (the start's mover group, ConsensusConfig::start_max_black_share; the holes tested by their own
+// flow, holesToTest).
+constexpr float kBlackGrey = 0.1f;
+
 // Builds a frame from a BGR image and a raw 16-bit depth image (depth_scale units per metre,
 // 5000 for TUM). Sizes must match; the caller has checked types.
 RgbdFrame makeRgbdFrame(double timestamp, const cv::Mat& bgr8, const cv::Mat& depth16, double depth_scale,

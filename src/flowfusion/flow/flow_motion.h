@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/se3.h"
 #include "flowfusion/flow/optical_flow.h"
 
@@ -61,8 +62,6 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_s
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
                                                 map_role_margin, start_min_separation, start_max_black_share)
 
-// Grey level (of [0, 1]) below which a pixel counts as black for start_max_black_share.
-constexpr float kBlackGrey = 0.1f;
 // When at least this share of all the samples is black, the image is dim rather than a screen
 // in a lit room, and start_max_black_share is not applied.
 constexpr double kMostlyBlackFrame = 0.5;

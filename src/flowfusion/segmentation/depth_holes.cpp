@@ -107,7 +107,7 @@ cv::Mat openedOrEmpty(cv::Mat pixels) {
 cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity) {
   if (depth.type() != CV_32FC1 || intensity.type() != CV_32FC1 || intensity.size() != depth.size())
     throw InputError("holesToTest: the depth and the intensity must be CV_32FC1 of one size");
-  cv::Mat holes = ~(depth > 0.f) & (intensity >= kHoleMinIntensity) & (intensity <= kHoleMaxIntensity);
+  cv::Mat holes = ~(depth > 0.f) & (intensity >= kBlackGrey) & (intensity <= kHoleMaxIntensity);
   holes.setTo(0, sensorBand(depth));
   return openedOrEmpty(holes);
 }

@@ -8,6 +8,8 @@
 // image motion no static surface around it explains, beside a mover, is the mover's (movingHoles).
 #include <opencv2/core.hpp>
 
+#include "flowfusion/core/rgbd_frame.h"
+
 namespace ff {
 
 // Marks (255) every 4-connected region of `depth` without a valid value (<= 0 or NaN; CV_32F,
@@ -37,8 +39,7 @@ constexpr int kBandMaxFraction = 10;
 // size; a black screen's or a window's flow is filled in from around it and means nothing), in
 // regions at least kHoleMinWidthPx wide (the flow's spill over a mover's edge is narrower).
 cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity);
-constexpr float kHoleMinIntensity = 0.1f;
-constexpr float kHoleMaxIntensity = 0.9f;
+constexpr float kHoleMaxIntensity = 0.9f;  // white (a window); black is kBlackGrey
 constexpr int kHoleMinWidthPx = 7;
 
 // Those of `holes` (holesToTest's) that move on their own (CV_8U, 255; empty when none): where
