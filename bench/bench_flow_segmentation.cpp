@@ -1,7 +1,7 @@
 // Micro-benchmarks of optical flow, flow residuals, clustering and the score solve, with
 // accuracy counters measured on the analytic test scene (tests/flow/analytic_scene.h), whose
 // true flow is known: static pixels move by egoFlow() of the true depth and motion.
-//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score|P3P|Ap3p|Carry'
+//   build-*/bench/flowfusion_microbench --benchmark_filter='Flow|Cluster|Score|P3P|Ap3p|Carry|MaskEdges'
 //     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one command line)
 // Counters: epe_px = mean end-point error over static, unoccluded pixels that stay in view;
 // straddle = fraction of clusters with >= 10 % of their pixels on each side of the moving
@@ -13,6 +13,7 @@
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "flowfusion/flow/p3p.h"
 #include "flowfusion/segmentation/clustering.h"
 #include "flowfusion/segmentation/dynamic_score.h"
+#include "flowfusion/segmentation/mask_edges.h"
 #include "flowfusion/segmentation/score_carry.h"
 
 namespace {
@@ -128,6 +130,22 @@ void BM_CarryScores(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_CarryScores)->Arg(640)->Arg(320)->Unit(benchmark::kMillisecond);
+
+// The written mask's edge refined at the input's resolution (mask_edges.h; once a frame at 640x480):
+// the box's mask as the half-size scores give it, shifted by two pixels, against BM_CarryScores/640.
+void BM_RefineMaskEdges(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const FlowPair p = makePair(width);
+  cv::Mat shifted;
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 2, 0, 1, 0);
+  cv::warpAffine(p.a.mask, shifted, shift, p.a.mask.size(), cv::INTER_NEAREST);
+  for (auto _ : state) {
+    cv::Mat mask = shifted.clone();
+    ff::refineMaskEdges(mask, p.a.frame.depth, p.a.frame.color, 2);
+    benchmark::DoNotOptimize(mask.data);
+  }
+}
+BENCHMARK(BM_RefineMaskEdges)->Arg(640)->Unit(benchmark::kMillisecond);
 
 void runCluster(benchmark::State& state, const std::string& backend) {
   const int width = static_cast<int>(state.range(0));

@@ -9,6 +9,7 @@
 #include "flowfusion/segmentation/depth_holes.h"
 #include "flowfusion/segmentation/dynamic_score.h"
 #include "flowfusion/segmentation/map_agreement_mask.h"
+#include "flowfusion/segmentation/mask_edges.h"
 #include "flowfusion/segmentation/score_carry.h"
 #include "flowfusion/segmentation/small_regions.h"
 
@@ -171,6 +172,7 @@ void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedSc
     moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
     markHolesBesideMovers(mask, moving);
   }
+  refineMaskEdges(mask, frame.depth, frame.color, opt.mask_edge_px);
 }
 
 FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, const OdometryFrame& cur,

@@ -61,6 +61,10 @@ struct PipelineOptions {
   // mask_keep_max_agreement of their pixels on the stable map (seenMovingClusters: a box 2 m away).
   double mask_keep_flow_px = 4.0;
   double mask_keep_max_agreement = 0.1;
+  // Pixels of the input image (0: off): within this radius of the written mask's edge a pixel
+  // joins the side whose depth it is nearer across a depth step, one without depth the side whose
+  // colour it is nearer (refineMaskEdges: the scores' half-size pixels, the sensor's shadow).
+  int mask_edge_px = 2;
   // Keep each scored frame's per-cluster evidence (FrameResult::clusters; `run --cluster-log`
   // writes it): why a region is marked or not. One row per cluster.
   bool cluster_log = false;
@@ -89,7 +93,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyfr
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
                                                 mask_hole_flow_px, mask_map_agreement, mask_min_region, mask_keep_flow_px,
-                                                mask_keep_max_agreement, cluster_log, carry_scores,
+                                                mask_keep_max_agreement, mask_edge_px, cluster_log, carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
                                                 model_min_valid_fraction, budget_ms)
 
