@@ -127,7 +127,8 @@ class FlowFusionSystem {
   // The written mask after the tracking, the fusion and the next targets have used the scores:
   // without the pixels the stable map holds (pipeline.mask_map_agreement), the small marks inside
   // the view (mask_min_region) but those on clusters seen moving (mask_keep_flow_px), and with the
-  // depth holes of a mover filled (mask_hole_share) or moving with it (mask_hole_flow_px).
+  // depth holes of a mover filled (mask_hole_share) or moving with it (mask_hole_flow_px), its edge
+  // refined at the input's resolution (mask_edge_px).
   void finishWrittenMask(const RgbdFrame& frame, const TrackedScores& tracked, cv::Mat& mask) const;
   // Starts fusing the frame into the map on a worker thread (every fusion_every frames; a frame
   // past its budget leaves it to the next, up to 2 x fusion_every frames unfused).
