@@ -109,17 +109,26 @@ std::vector<MapRelation> wallOnMap(const FlowCorrespondences& c, const CameraInt
   return relation;
 }
 
-TEST(FlowMotion, AMoverFillingMostOfTheViewIsTheMoverWhenTheMapSaysSo) {
-  AnalyticScene scene = AnalyticScene::make(640, 480);
-  scene.box_half = Eigen::Vector3d(0.55, 0.42, 0.2);
-  scene.box_centre = Eigen::Vector3d(0.05, 0.05, 1.4);
-  const SE3 T_b_a = cameraMotion().inverse();
+// A box filling most of the view, 1.2 m away before the wall: its exact two-motion flow sampled.
+struct LargeBoxCase {
+  AnalyticScene scene = [] {
+    AnalyticScene s = AnalyticScene::make(640, 480);
+    s.box_half = Eigen::Vector3d(0.55, 0.42, 0.2);
+    s.box_centre = Eigen::Vector3d(0.05, 0.05, 1.4);
+    return s;
+  }();
+  SE3 T_b_a = cameraMotion().inverse();
   cv::Mat box_mask;
-  const FlowField flow = exactTwoMotionFlow(scene, cameraMotion(), boxMotion(), box_mask);
-  const FlowCorrespondences c =
-      sampleFlowCorrespondences(flow, scene.render(SE3::Identity()).frame.depth, scene.camera, 16);
+  FlowField flow = exactTwoMotionFlow(scene, cameraMotion(), boxMotion(), box_mask);
+  FlowCorrespondences c = sampleFlowCorrespondences(flow, scene.render(SE3::Identity()).frame.depth, scene.camera, 16);
+};
+
+TEST(FlowMotion, AMoverFillingMostOfTheViewIsTheMoverWhenTheMapSaysSo) {
+  const LargeBoxCase t;
+  const auto& [scene, T_b_a, box_mask, flow, c] = t;
   ASSERT_GT(cv::countNonZero(box_mask), 0.52 * box_mask.total()) << "the box must fill most of the view";
-  const ConsensusConfig cfg;
+  ConsensusConfig cfg;
+  cfg.nearer_mover_depth_ratio = 0;  // the roles by size alone
   // Without the map the larger group, the box, is taken for the background, and a correct
   // odometry looks captured.
   const auto by_size = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
@@ -139,6 +148,26 @@ TEST(FlowMotion, AMoverFillingMostOfTheViewIsTheMoverWhenTheMapSaysSo) {
   const std::vector<MapRelation> unknown(c.size(), MapRelation::kUnknown);
   EXPECT_LT(translationErrorM(splitFlowMotions(c, scene.camera, cfg, {}, unknown).T_b_a_background, T_b_a * boxMotion()),
             1e-3);
+}
+
+TEST(FlowMotion, OfTwoComparableGroupsTheNearerIsTheMoverWithoutAMap) {
+  // The same box over most of the view, with no map to say which motion is the world's (the
+  // start: the map is the first frame, box and all): the box lies nearer than 0.75 of the wall's
+  // depth and the wall's group holds over 0.6 of the box's samples, so the box is the mover.
+  const LargeBoxCase t;
+  const auto& [scene, T_b_a, box_mask, flow, c] = t;
+  const ConsensusConfig cfg;
+  const FlowMotionSplit split = splitFlowMotions(c, scene.camera, cfg);
+  ASSERT_TRUE(split.ok);
+  EXPECT_LT(translationErrorM(split.T_b_a_background, T_b_a), 1e-3);
+  EXPECT_LT(translationErrorM(split.T_b_a_mover, T_b_a * boxMotion()), 1e-3);
+  const auto against = splitFlowAgainst(c, scene.camera, T_b_a, cfg);
+  ASSERT_TRUE(against);
+  EXPECT_FALSE(misledOdometry(c, scene.camera, *against, T_b_a, cfg)) << "a correct odometry is not captured";
+  // A smaller box (a third of the view) is the mover by its size, as before.
+  const TwoMotionCase small;
+  const FlowMotionSplit by_size = splitFlowMotions(small.c, small.scene.camera, cfg);
+  EXPECT_LT(translationErrorM(by_size.T_b_a_mover, small.T_b_a * boxMotion()), 1e-3);
 }
 
 TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
@@ -265,6 +294,9 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.map_role_margin = 0;
+  EXPECT_THROW(validate(bad), InputError);
+  bad = ConsensusConfig{};
+  bad.nearer_mover_depth_ratio = 1;
   EXPECT_THROW(validate(bad), InputError);
 }
 

@@ -26,6 +26,8 @@ void validate(const ConsensusConfig& c) {
   if (!(c.min_gain >= 0 && c.min_gain <= 1)) throw InputError("consensus.min_gain must be in [0, 1]");
   if (!(c.map_role_margin > 0 && c.map_role_margin <= 1))
     throw InputError("consensus.map_role_margin must be in (0, 1]");
+  if (!(c.nearer_mover_depth_ratio >= 0 && c.nearer_mover_depth_ratio < 1))
+    throw InputError("consensus.nearer_mover_depth_ratio must be in [0, 1) (0: the roles by size alone)");
   if (!(c.start_min_separation >= 0 && std::isfinite(c.start_min_separation)))
     throw InputError("consensus.start_min_separation must be a finite share >= 0 of the image motion");
   if (!(c.start_max_black_share >= 0 && c.start_max_black_share <= 1))
@@ -247,6 +249,19 @@ bool mapSwapsRoles(const FlowMotionSplit& split, const std::vector<MapRelation>&
   return front_share[FlowMotionSplit::kBackground] - front_share[FlowMotionSplit::kMover] >= margin;
 }
 
+// Whether the background group (the larger) lies nearer than `ratio` of the mover group's depth
+// while the mover group is comparable in size: then the nearer group is the mover.
+bool nearerGroupIsMover(const FlowMotionSplit& split, const FlowCorrespondences& c, double ratio) {
+  constexpr size_t kMinSamples = 10;
+  std::vector<double> z[2];
+  for (size_t k = 0; k < split.group.size() && k < c.size(); ++k)
+    if (split.group[k] != FlowMotionSplit::kNeither) z[split.group[k]].push_back(c.points_a[k].z);
+  const std::vector<double>& background = z[FlowMotionSplit::kBackground];
+  const std::vector<double>& mover = z[FlowMotionSplit::kMover];
+  if (mover.size() < kMinSamples || mover.size() < kComparableGroups * background.size()) return false;
+  return median(background) < ratio * median(mover);
+}
+
 }  // namespace
 
 int countFlowInliers(const FlowCorrespondences& c, const CameraIntrinsics& camera, const SE3& T_b_a,
@@ -278,10 +293,13 @@ FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntri
     T_first = refineOn(c, membersOf(s, FlowMotionSplit::kBackground), camera, T_first);
     T_second = refineOn(c, membersOf(s, FlowMotionSplit::kMover), camera, T_second);
   }
-  // The background's is the motion of the larger group, unless the map says otherwise.
+  // The background's is the motion of the larger group, or of the farther of two comparable ones,
+  // unless the map says otherwise.
   FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
   if (groupSize(split, FlowMotionSplit::kMover) > groupSize(split, FlowMotionSplit::kBackground))
     split = withRoles(c, camera, config, T_second, T_first);
+  if (nearerGroupIsMover(split, c, config.nearer_mover_depth_ratio))
+    split = withRoles(c, camera, config, split.T_b_a_mover, split.T_b_a_background);
   if (mapSwapsRoles(split, relation, config.map_role_margin))
     split = withRoles(c, camera, config, split.T_b_a_mover, split.T_b_a_background);
   return split;

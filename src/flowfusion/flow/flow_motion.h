@@ -47,6 +47,11 @@ struct ConsensusConfig {
   // map in frame B exceeds the other group's by this (a mover filling most of the view); else the
   // larger group is the background.
   double map_role_margin = 0.5;
+  // Before that, where the larger group lies nearer than this ratio of the other's depth (medians)
+  // and the other holds at least kComparableGroups of its samples, the larger is the mover's: a
+  // mover occludes the world behind it (a box over half the view at the start, when the map is
+  // the first frame, box and all; docs/tuning.md#nearer_mover_depth_ratio). 0 = by size alone.
+  double nearer_mover_depth_ratio = 0.75;
   // At the start (no scores yet) the split's mover group is taken for the movers only when its
   // motion moves its samples at least this share of the image motion (median flow) away from where
   // the background's motion puts them: the flow's errors that grow with the image motion (blur, the
@@ -60,7 +65,11 @@ struct ConsensusConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
-                                                map_role_margin, start_min_separation, start_max_black_share)
+                                                map_role_margin, nearer_mover_depth_ratio, start_min_separation,
+                                                start_max_black_share)
+
+// The smaller group's samples over the larger's at which nearer_mover_depth_ratio applies.
+constexpr double kComparableGroups = 0.6;
 
 // When at least this share of all the samples is black, the image is dim rather than a screen
 // in a lit room, and start_max_black_share is not applied.
@@ -106,8 +115,9 @@ struct FlowMotionSplit {
 // with one motion of the two alone within inlier_px (a far background that a correct and a
 // slightly wrong camera motion both explain does not make them a pair), then refined by
 // alternately assigning each correspondence to the motion that explains it better and re-fitting
-// both (Levenberg-Marquardt). `relation` (one per correspondence, or empty) decides the roles as
-// ConsensusConfig::map_role_margin says. Deterministic.
+// both (Levenberg-Marquardt). The larger group is the background, or the farther of two comparable
+// ones (ConsensusConfig::nearer_mover_depth_ratio); `relation` (one per correspondence, or empty)
+// then decides the roles as ConsensusConfig::map_role_margin says. Deterministic.
 FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntrinsics& camera,
                                  const ConsensusConfig& config, const std::vector<SE3>& seeds = {},
                                  const std::vector<MapRelation>& relation = {});
