@@ -52,6 +52,11 @@ struct ConsensusConfig {
   // mover occludes the world behind it (a box over half the view at the start, when the map is
   // the first frame, box and all; docs/tuning.md#nearer_mover_depth_ratio). 0 = by size alone.
   double nearer_mover_depth_ratio = 0.75;
+  // For map_role_margin's relations, a point the previous frame's scores held for a mover counts
+  // as in front of the map whatever the map shows there: the map never took it, and behind a large
+  // mover the map may hold nothing yet (a box over half the view since the first frame), which left
+  // the roles to the size alone (docs/tuning.md#previous_movers_in_front). false = the map's depth.
+  bool previous_movers_in_front = true;
   // At the start (no scores yet) the split's mover group is taken for the movers only when its
   // motion moves its samples at least this share of the image motion (median flow) away from where
   // the background's motion puts them: the flow's errors that grow with the image motion (blur, the
@@ -65,8 +70,8 @@ struct ConsensusConfig {
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
-                                                map_role_margin, nearer_mover_depth_ratio, start_min_separation,
-                                                start_max_black_share)
+                                                map_role_margin, nearer_mover_depth_ratio, previous_movers_in_front,
+                                                start_min_separation, start_max_black_share)
 
 // The smaller group's samples over the larger's at which nearer_mover_depth_ratio applies.
 constexpr double kComparableGroups = 0.6;
@@ -90,7 +95,8 @@ FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::M
                                               const CameraIntrinsics& camera, int step);
 
 // Where a correspondence's point lay in frame B against the static map (rendered at B's pose): on
-// its surface, in front of it (something not in the map: a mover), or unknown (no map there).
+// its surface, in front of it (something not in the map: a mover, or a point B's scores held for
+// one), or unknown (no map there).
 enum class MapRelation : unsigned char { kUnknown, kOnMap, kInFront };
 
 // Correspondences T_b_a explains within `inlier_px`, the reprojection error in B.

@@ -193,7 +193,7 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   {
     StageTimer timer(timings, "consensus");
     samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step);
-    relation = mapRelations(in.previous.frame.depth, previous_background, samples);
+    relation = mapRelations(in.previous.frame.depth, previous_background, in.previous.scores, samples);
     if (!start) {
       split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus, relation);
     } else if (FlowMotionSplit s = splitFlowMotions(samples, camera_, config_.consensus, {T_prev_cur}, relation); s.ok) {
@@ -225,8 +225,10 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
 }
 
 std::vector<MapRelation> SegmentationLoop::mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
+                                                        const cv::Mat& previous_scores,
                                                         const FlowCorrespondences& samples) const {
   if (previous_background.empty()) return {};
+  const bool movers_in_front = config_.consensus.previous_movers_in_front && !previous_scores.empty();
   // The previous frame's depth where the flow lands, against the map's stable surfaces there.
   const double to_level = std::ldexp(1.0, -config_.pipeline.segmentation_level);
   std::vector<MapRelation> relation(samples.size(), MapRelation::kUnknown);
@@ -237,7 +239,12 @@ std::vector<MapRelation> SegmentationLoop::mapRelations(const cv::Mat& previous_
     const int ul = std::min(static_cast<int>(b.x * to_level), previous_background.cols - 1);
     const int vl = std::min(static_cast<int>(b.y * to_level), previous_background.rows - 1);
     const float d = previous_depth.at<float>(v, u), m = previous_background.at<float>(vl, ul);
-    if (!(d > 0) || !(m > 0)) continue;
+    if (!(d > 0)) continue;
+    if (movers_in_front && previous_scores.at<float>(vl, ul) > kDynamicScore) {
+      relation[k] = MapRelation::kInFront;
+      continue;
+    }
+    if (!(m > 0)) continue;
     const double margin = config_.scores.model_margin * m;
     if (std::abs(d - m) <= margin)
       relation[k] = MapRelation::kOnMap;

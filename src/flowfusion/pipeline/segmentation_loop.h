@@ -93,9 +93,9 @@ class SegmentationLoop {
   // The surfaces around a hole are looked for within a square of 1/kHoleWindowFraction of the width.
   static constexpr int kHoleWindowFraction = 8;
   // Where the samples' points lay in the previous frame (its depth) against the static map's depth
-  // rendered for it (segmentation level; empty: no relations).
+  // rendered for it and its scores (segmentation level; empty background: no relations).
   std::vector<MapRelation> mapRelations(const cv::Mat& previous_depth, const cv::Mat& previous_background,
-                                        const FlowCorrespondences& samples) const;
+                                        const cv::Mat& previous_scores, const FlowCorrespondences& samples) const;
   void restartFromFlow(const SegmentationInput& in, const FlowField& flow, const FlowField& seg_flow,
                        const cv::Mat& previous_background, MotionEstimate& estimate, Timings& timings);
   // Which pixels are the split's mover: its own (the background's motion leaves them beyond
