@@ -170,6 +170,69 @@ TEST(FlowMotion, OfTwoComparableGroupsTheNearerIsTheMoverWithoutAMap) {
   EXPECT_LT(translationErrorM(by_size.T_b_a_mover, small.T_b_a * boxMotion()), 1e-3);
 }
 
+TEST(FlowMotion, TextureIsTheImagesVariationInItsWeakerDirection) {
+  // A uniform patch, a straight edge and a linear ramp have none: along the edge, and across the
+  // ramp's gradient, the image is constant and the flow is not in it. A checkerboard of 2-pixel
+  // squares varies in every direction.
+  cv::Mat uniform(40, 40, CV_32F, cv::Scalar(0.5f));
+  EXPECT_NEAR(textureAt(uniform, 20, 20), 0.0, 1e-9);
+  cv::Mat edge = uniform.clone();
+  edge.colRange(20, 40).setTo(0.9f);
+  EXPECT_NEAR(textureAt(edge, 20, 20), 0.0, 1e-6);
+  cv::Mat ramp(40, 40, CV_32F);
+  for (int v = 0; v < 40; ++v)
+    for (int u = 0; u < 40; ++u) ramp.at<float>(v, u) = (4.f * u + 4.f * v) / 255.f;
+  EXPECT_NEAR(textureAt(ramp, 20, 20), 0.0, 1e-3);
+  cv::Mat checker(40, 40, CV_32F);
+  for (int v = 0; v < 40; ++v)
+    for (int u = 0; u < 40; ++u) checker.at<float>(v, u) = ((u / 2 + v / 2) % 2) ? 0.6f : 0.4f;
+  EXPECT_GT(textureAt(checker, 20, 20), 10.0) << "grey levels per pixel";
+}
+
+TEST(FlowMotion, AtTheStartTheLargerGroupIsCountedInItsTexturedSamples) {
+  // The box over most of the view, uniform grey (a flat-coloured box at the start, its flow filled
+  // in from its outline): with the roles by size alone, the box's group is the larger in all
+  // samples, the wall's in the samples where the image is textured, so the wall is the background.
+  const LargeBoxCase t;
+  const auto& [scene, T_b_a, box_mask, flow, c] = t;
+  const auto a = scene.render(SE3::Identity());
+  // A fine texture everywhere (sensor noise and print, about 5 grey levels), then the box uniform.
+  cv::Mat fine(a.frame.intensity.size(), CV_32F);
+  cv::RNG rng(7);
+  rng.fill(fine, cv::RNG::NORMAL, 0.0, 0.02);
+  const cv::Mat textured_image = a.frame.intensity + fine;
+  cv::Mat intensity = textured_image.clone();
+  intensity.setTo(0.5f, box_mask);
+  ConsensusConfig cfg;
+  cfg.nearer_mover_depth_ratio = 0;
+  const FlowCorrespondences measured =
+      sampleFlowCorrespondences(flow, a.frame.depth, scene.camera, 16, intensity, cfg.start_min_texture);
+  ASSERT_EQ(measured.textured.size(), measured.size());
+  int textured[2] = {0, 0}, all[2] = {0, 0};  // wall, box
+  for (size_t k = 0; k < measured.size(); ++k) {
+    const cv::Point3f& p = measured.points_a[k];
+    const Eigen::Vector2d uv = scene.camera.project(Eigen::Vector3d(p.x, p.y, p.z));
+    const int on_box = box_mask.at<unsigned char>(static_cast<int>(std::lround(uv.y())), static_cast<int>(std::lround(uv.x())))
+                           ? 1 : 0;
+    ++all[on_box];
+    textured[on_box] += measured.textured[k];
+  }
+  ASSERT_GT(all[1], all[0]) << "the box's samples outnumber the wall's";
+  EXPECT_GT(textured[0], 0.9 * all[0]) << "the wall's texture";
+  EXPECT_LT(textured[1], 0.2 * all[1]) << "only the box's outline";
+  const FlowMotionSplit split = splitFlowMotions(measured, scene.camera, cfg);
+  ASSERT_TRUE(split.ok);
+  EXPECT_LT(translationErrorM(split.T_b_a_background, T_b_a), 1e-3);
+  EXPECT_LT(translationErrorM(split.T_b_a_mover, T_b_a * boxMotion()), 1e-3);
+  // Textured as the wall, the box is the larger group again; without the image, by all samples.
+  const FlowCorrespondences textured_box =
+      sampleFlowCorrespondences(flow, a.frame.depth, scene.camera, 16, textured_image, cfg.start_min_texture);
+  EXPECT_LT(translationErrorM(splitFlowMotions(textured_box, scene.camera, cfg).T_b_a_background, T_b_a * boxMotion()),
+            1e-3);
+  EXPECT_TRUE(c.textured.empty());
+  EXPECT_LT(translationErrorM(splitFlowMotions(c, scene.camera, cfg).T_b_a_background, T_b_a * boxMotion()), 1e-3);
+}
+
 TEST(FlowMotion, RecoversTheCameraMotionFromDisFlow) {
   const AnalyticScene scene = bigBoxScene();
   const SE3 T_world_b = cameraMotion();
@@ -274,6 +337,9 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   const cv::Mat depth(240, 320, CV_32F, cv::Scalar(1));
   const FlowField small{cv::Mat(120, 160, CV_32FC2, cv::Scalar(0, 0))};
   EXPECT_THROW(sampleFlowCorrespondences(small, depth, scene.camera, 8), InputError);
+  const FlowField still{cv::Mat(240, 320, CV_32FC2, cv::Scalar(0, 0))};
+  const cv::Mat half_intensity(120, 160, CV_32F, cv::Scalar(0.5));
+  EXPECT_THROW(sampleFlowCorrespondences(still, depth, scene.camera, 8, half_intensity, 0.8), InputError);
   ConsensusConfig bad;
   bad.inlier_px = 0;
   EXPECT_THROW(validate(bad), InputError);
@@ -285,6 +351,9 @@ TEST(FlowMotion, SamplingRejectsMismatchedInputsAndBadConfigs) {
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.start_max_black_share = 1.5;
+  EXPECT_THROW(validate(bad), InputError);
+  bad = ConsensusConfig{};
+  bad.start_min_texture = -1;
   EXPECT_THROW(validate(bad), InputError);
   bad = ConsensusConfig{};
   bad.min_captured = 0;

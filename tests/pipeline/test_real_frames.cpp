@@ -408,10 +408,12 @@ TEST(RealFrames, APersonFoundBeforeARestartFromTheFlowIsNotLost) {
 }
 
 // Frames 0..last of `seq` with `config`, and again with `cause` applied to it (the rule under test
-// turned off): both runs, and the mean IoU over frames first..last of each, printed.
+// turned off): both runs, the mean IoU over frames first..last of each and, where `seq` has a
+// ground truth, the ATE of each over frames 0..last, printed.
 struct CauseRuns {
   RunAgainstTruth with, without;
   double with_iou = 0, without_iou = 0;
+  double with_ate_m = std::numeric_limits<double>::quiet_NaN(), without_ate_m = with_ate_m;
 };
 CauseRuns runWithAndWithoutCause(const TumSequence& seq, SystemConfig config,
                                  const std::function<void(SystemConfig&)>& cause, int first, int last) {
@@ -423,6 +425,12 @@ CauseRuns runWithAndWithoutCause(const TumSequence& seq, SystemConfig config,
   r.without_iou = meanOf(r.without.iou, first, last);
   std::printf("[ measured ] frames %d-%d mean IoU %.2f, with the cause %.2f\n", first, last, r.with_iou,
               r.without_iou);
+  if (const auto& truth = seq.groundtruth()) {
+    r.with_ate_m = eval::computeAte(*truth, r.with.trajectory).translation_m.rmse;
+    r.without_ate_m = eval::computeAte(*truth, r.without.trajectory).translation_m.rmse;
+    std::printf("[ measured ] frames 0-%d ATE %.1f mm, with the cause %.1f mm\n", last, 1e3 * r.with_ate_m,
+                1e3 * r.without_ate_m);
+  }
   return r;
 }
 
@@ -521,25 +529,47 @@ TEST(RealFrames, ABoxThePreviousScoresHeldIsNotTakenForTheWorld) {
   // split takes the box's group (423 samples) for the world's and the desk's (228) for the mover's,
   // the groups too unequal for the nearer-is-the-mover rule, and the map has nothing behind the box
   // to say otherwise. The correct odometry looked captured, was restarted on the box's motion and
-  // jumped 16 cm: frames 0-16 ATE 40 mm. The box's samples lay where frame 9's scores held a mover,
+  // jumped 16 cm: frames 0-11 ATE 40 mm. The box's samples lay where frame 9's scores held a mover,
   // which counts as in front of the map (consensus.previous_movers_in_front): the roles stay, 6 mm.
   synth::AugmentConfig config;
   config.seed = 2095;
   config.objects = 2;
-  config.last_frame = 16;
+  config.last_frame = 11;
   const testing::TempDir tmp;
   const auto augmented = withMovers("fr1_xyz_head300", config, tmp);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   ASSERT_TRUE(augmented->groundtruth());
   const CauseRuns r = runWithAndWithoutCause(
       *augmented, SystemConfig{}, [](SystemConfig& c) { c.consensus.previous_movers_in_front = false; }, 10, 11);
-  const double with_ate = eval::computeAte(*augmented->groundtruth(), r.with.trajectory).translation_m.rmse;
-  const double without_ate = eval::computeAte(*augmented->groundtruth(), r.without.trajectory).translation_m.rmse;
-  std::printf("[ measured ] frames 0-16 ATE %.1f mm, with the cause %.1f mm\n", 1e3 * with_ate, 1e3 * without_ate);
-  EXPECT_LT(with_ate, 0.010) << "frames 0-16, the box held for the mover";
-  EXPECT_GT(without_ate, 0.025) << "the cause: the odometry restarted on the box's motion";
+  EXPECT_LT(r.with_ate_m, 0.010) << "frames 0-11, the box held for the mover";
+  EXPECT_GT(r.without_ate_m, 0.025) << "the cause: the odometry restarted on the box's motion";
   EXPECT_GT(r.with_iou, 0.9) << "frames 10-11";
   EXPECT_LT(r.without_iou, 0.8) << "the cause: the desk beside the box marked";
+}
+
+TEST(RealFrames, AUniformBoxOverHalfTheFirstViewIsNotTakenForTheWorld) {
+  // fr1/rpy with a box and a person (augment seed 2094, n_rpy_mixed of the seeds + 2000 set in
+  // docs/scenes.md): in the first frame a flat-coloured box 0.57 m away covers 40 % of the view
+  // beside a blurred desk 1.06 m away. The start's split found the box's group the larger (428
+  // samples against 207), too unequal for the nearer-is-the-mover rule, so the desk was marked
+  // and the odometry followed the box. Counted over the samples where the image is textured (78
+  // against 116; the box's flow is filled in from its outline), the desk's is the world's motion
+  // (consensus.start_min_texture): frames 1-6 mean IoU 0.88 against 0.28, frames 0-6 ATE 6.8 mm
+  // against 10.4 mm.
+  synth::AugmentConfig config;
+  config.seed = 2094;
+  config.objects = 1;
+  config.people = 1;
+  config.last_frame = 6;
+  const testing::TempDir tmp;
+  const auto augmented = withMovers("fr1_rpy_head150", config, tmp);
+  if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
+  ASSERT_TRUE(augmented->groundtruth());
+  const CauseRuns r = runWithAndWithoutCause(
+      *augmented, SystemConfig{}, [](SystemConfig& c) { c.consensus.start_min_texture = 0; }, 1, 6);
+  EXPECT_GT(r.with_iou, 0.7) << "frames 1-6, the box found";
+  EXPECT_LT(r.without_iou, 0.4) << "the cause: the desk marked";
+  EXPECT_LT(r.with_ate_m, 0.8 * r.without_ate_m) << "the odometry kept off the box";
 }
 
 }  // namespace

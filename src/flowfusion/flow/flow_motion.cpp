@@ -32,13 +32,39 @@ void validate(const ConsensusConfig& c) {
     throw InputError("consensus.start_min_separation must be a finite share >= 0 of the image motion");
   if (!(c.start_max_black_share >= 0 && c.start_max_black_share <= 1))
     throw InputError("consensus.start_max_black_share must be a share in [0, 1]");
+  if (!(c.start_min_texture >= 0 && std::isfinite(c.start_min_texture)))
+    throw InputError("consensus.start_min_texture must be a finite number of grey levels per pixel >= 0 (0: all samples)");
+}
+
+double textureAt(const cv::Mat& intensity, int u, int v) {
+  constexpr int kHalf = 4;  // 9 x 9 pixels
+  double xx = 0, yy = 0, xy = 0;
+  int n = 0;
+  for (int y = std::max(1, v - kHalf); y <= std::min(intensity.rows - 2, v + kHalf); ++y) {
+    const float* row = intensity.ptr<float>(y);
+    const float* up = intensity.ptr<float>(y - 1);
+    const float* down = intensity.ptr<float>(y + 1);
+    for (int x = std::max(1, u - kHalf); x <= std::min(intensity.cols - 2, u + kHalf); ++x, ++n) {
+      const double gx = 0.5 * (row[x + 1] - row[x - 1]), gy = 0.5 * (down[x] - up[x]);
+      xx += gx * gx;
+      yy += gy * gy;
+      xy += gx * gy;
+    }
+  }
+  if (n == 0) return 0;
+  const double smaller = 0.5 * (xx + yy - std::sqrt((xx - yy) * (xx - yy) + 4 * xy * xy)) / n;
+  return 255.0 * std::sqrt(std::max(smaller, 0.0));
 }
 
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
-                                              const CameraIntrinsics& camera, int step) {
+                                              const CameraIntrinsics& camera, int step, const cv::Mat& intensity_a,
+                                              double min_texture_grey) {
   if (flow.uv.type() != CV_32FC2 || depth_a.type() != CV_32FC1 || flow.uv.size() != depth_a.size() ||
       depth_a.cols != camera.width || depth_a.rows != camera.height)
     throw InputError("sampleFlowCorrespondences: flow (CV_32FC2), depth (CV_32F) and camera sizes must match");
+  const bool texture = min_texture_grey > 0 && !intensity_a.empty();
+  if (texture && (intensity_a.type() != CV_32FC1 || intensity_a.size() != depth_a.size()))
+    throw InputError("sampleFlowCorrespondences: the intensity must be CV_32F of the depth's size");
   FlowCorrespondences c;
   for (int v = step / 2; v < depth_a.rows; v += step)
     for (int u = step / 2; u < depth_a.cols; u += step) {
@@ -50,6 +76,7 @@ FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::M
       const Eigen::Vector3d p = camera.backproject(u, v, z);
       c.points_a.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
       c.pixels_b.emplace_back(static_cast<float>(ub), static_cast<float>(vb));
+      if (texture) c.textured.push_back(textureAt(intensity_a, u, v) >= min_texture_grey);
     }
   return c;
 }
@@ -219,6 +246,21 @@ std::ptrdiff_t groupSize(const FlowMotionSplit& split, FlowMotionSplit::Group gr
   return std::count(split.group.begin(), split.group.end(), group);
 }
 
+// Whether the mover group outnumbers the background group: in textured samples when the
+// correspondences say which are and at least kMinTextured of the two groups' are, else in all.
+bool moverGroupIsLarger(const FlowMotionSplit& split, const FlowCorrespondences& c) {
+  constexpr std::ptrdiff_t kMinTextured = 30;
+  std::ptrdiff_t all[2] = {0, 0}, textured[2] = {0, 0};
+  for (size_t k = 0; k < split.group.size(); ++k) {
+    const int g = split.group[k];
+    if (g == FlowMotionSplit::kNeither) continue;
+    ++all[g];
+    textured[g] += k < c.textured.size() && c.textured[k];
+  }
+  const std::ptrdiff_t* count = textured[0] + textured[1] >= kMinTextured ? textured : all;
+  return count[FlowMotionSplit::kMover] > count[FlowMotionSplit::kBackground];
+}
+
 // The correspondences in `group`.
 std::vector<int> membersOf(const FlowMotionSplit& split, FlowMotionSplit::Group group) {
   std::vector<int> members;
@@ -293,10 +335,10 @@ FlowMotionSplit splitFlowMotions(const FlowCorrespondences& c, const CameraIntri
     T_first = refineOn(c, membersOf(s, FlowMotionSplit::kBackground), camera, T_first);
     T_second = refineOn(c, membersOf(s, FlowMotionSplit::kMover), camera, T_second);
   }
-  // The background's is the motion of the larger group, or of the farther of two comparable ones,
-  // unless the map says otherwise.
+  // The background's is the motion of the larger group (by its textured samples where they were
+  // told), or of the farther of two comparable ones, unless the map says otherwise.
   FlowMotionSplit split = withRoles(c, camera, config, T_first, T_second);
-  if (groupSize(split, FlowMotionSplit::kMover) > groupSize(split, FlowMotionSplit::kBackground))
+  if (moverGroupIsLarger(split, c))
     split = withRoles(c, camera, config, T_second, T_first);
   if (nearerGroupIsMover(split, c, config.nearer_mover_depth_ratio))
     split = withRoles(c, camera, config, split.T_b_a_mover, split.T_b_a_background);

@@ -67,11 +67,18 @@ struct ConsensusConfig {
   // black screen's flow follows its reflections and what the flow fills in from around it, a second
   // motion no mover makes (docs/tuning.md#start_max_black_share). 1 = any.
   double start_max_black_share = 0.6;
+  // Grey levels (of 255) per pixel (our extension; 0 = by all samples): at the start the larger
+  // group is counted over the samples where the image varies at least this much in its weaker
+  // direction (textureAt), when 30 or more do: on a uniform surface the flow is filled in from its
+  // outline, and a large uniform box near the camera outnumbered the world's measured samples
+  // (docs/tuning.md#start_min_texture). After the start the previous frame's movers and the map
+  // hold the roles.
+  double start_min_texture = 0.8;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ConsensusConfig, enabled, grid_step, inlier_px, ransac_iterations,
                                                 local_hypotheses, min_mover_share, min_captured, min_gain,
                                                 map_role_margin, nearer_mover_depth_ratio, previous_movers_in_front,
-                                                start_min_separation, start_max_black_share)
+                                                start_min_separation, start_max_black_share, start_min_texture)
 
 // The smaller group's samples over the larger's at which nearer_mover_depth_ratio applies.
 constexpr double kComparableGroups = 0.6;
@@ -86,13 +93,25 @@ void validate(const ConsensusConfig& config);
 struct FlowCorrespondences {
   std::vector<cv::Point3f> points_a;
   std::vector<cv::Point2f> pixels_b;
+  // Per correspondence, whether A's image is textured there (textureAt at least the sampling's
+  // min_texture_grey): the flow is measured, not filled in. Empty when not sampled with an image.
+  std::vector<unsigned char> textured;
   size_t size() const { return points_a.size(); }
 };
 
 // Samples pixels of A on a grid of `step` pixels where A's depth is valid and the flow lands
-// inside B. flow.uv and depth_a (CV_32F, metres, <= 0 invalid) have the camera's size.
+// inside B. flow.uv and depth_a (CV_32F, metres, <= 0 invalid) have the camera's size. With
+// intensity_a (A's grey levels, CV_32F in [0, 1], the same size) and min_texture_grey > 0, also
+// which samples are textured.
 FlowCorrespondences sampleFlowCorrespondences(const FlowField& flow, const cv::Mat& depth_a,
-                                              const CameraIntrinsics& camera, int step);
+                                              const CameraIntrinsics& camera, int step,
+                                              const cv::Mat& intensity_a = cv::Mat(), double min_texture_grey = 0);
+
+// How much the image (CV_32F grey in [0, 1]) varies around (u, v) in its weaker direction, grey
+// levels of 255 per pixel: the square root of the smaller eigenvalue of the structure tensor of
+// its central-difference gradients over 9 x 9 pixels. Near 0 on a uniform surface and along a
+// single edge, where the optical flow is not determined by the image (the aperture problem).
+double textureAt(const cv::Mat& intensity, int u, int v);
 
 // Where a correspondence's point lay in frame B against the static map (rendered at B's pose): on
 // its surface, in front of it (something not in the map: a mover, or a point B's scores held for

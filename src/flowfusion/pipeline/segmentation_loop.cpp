@@ -192,7 +192,9 @@ void SegmentationLoop::restartFromFlow(const SegmentationInput& in, const FlowFi
   const SE3 T_prev_cur = in.T_target_prev.inverse() * estimate.T_target_cur;
   {
     StageTimer timer(timings, "consensus");
-    samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step);
+    // At the start the larger group counts only its measured (textured) samples (start_min_texture).
+    samples = sampleFlowCorrespondences(flow, in.frame.depth, camera_, config_.consensus.grid_step,
+                                        start ? in.frame.intensity : cv::Mat(), config_.consensus.start_min_texture);
     relation = mapRelations(in.previous.frame.depth, previous_background, in.previous.scores, samples);
     if (!start) {
       split = splitFlowAgainst(samples, camera_, T_prev_cur, config_.consensus, relation);
