@@ -243,7 +243,7 @@ TEST(RealFrames, SmallMarksInsideTheViewOfStaticFr1RpyAreNotWritten) {
 }
 
 // `people` walkers and `objects` boxes composited by augment (seed) into the shared real sequence
-// `head`, written to `out`; nullopt when ../shared is absent.
+// `head` (its frames up to last_frame, -1: all), written to `out`; nullopt when ../shared is absent.
 std::optional<TumSequence> withMovers(const std::string& head, synth::AugmentConfig config, const testing::TempDir& out) {
   const auto dir = testing::sharedTum(head);
   if (!dir) return std::nullopt;
@@ -251,11 +251,12 @@ std::optional<TumSequence> withMovers(const std::string& head, synth::AugmentCon
   return TumSequence::open(out.str());
 }
 std::optional<TumSequence> withMovers(const std::string& head, unsigned seed, int people, const testing::TempDir& out,
-                                      int objects = 0) {
+                                      int objects = 0, int last_frame = -1) {
   synth::AugmentConfig config;
   config.seed = seed;
   config.objects = objects;
   config.people = people;
+  config.last_frame = last_frame;
   return withMovers(head, config, out);
 }
 // fr1/xyz with a box brought 0.6-1.0 m in front of the camera (augment seed 2902, xyz_near of
@@ -531,12 +532,8 @@ TEST(RealFrames, ABoxThePreviousScoresHeldIsNotTakenForTheWorld) {
   // to say otherwise. The correct odometry looked captured, was restarted on the box's motion and
   // jumped 16 cm: frames 0-11 ATE 40 mm. The box's samples lay where frame 9's scores held a mover,
   // which counts as in front of the map (consensus.previous_movers_in_front): the roles stay, 6 mm.
-  synth::AugmentConfig config;
-  config.seed = 2095;
-  config.objects = 2;
-  config.last_frame = 11;
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_xyz_head300", config, tmp);
+  const auto augmented = withMovers("fr1_xyz_head300", 2095, 0, tmp, 2, 11);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   ASSERT_TRUE(augmented->groundtruth());
   const CauseRuns r = runWithAndWithoutCause(
@@ -556,13 +553,8 @@ TEST(RealFrames, AUniformBoxOverHalfTheFirstViewIsNotTakenForTheWorld) {
   // against 116; the box's flow is filled in from its outline), the desk's is the world's motion
   // (consensus.start_min_texture): frames 1-6 mean IoU 0.88 against 0.28, frames 0-6 ATE 6.8 mm
   // against 10.4 mm.
-  synth::AugmentConfig config;
-  config.seed = 2094;
-  config.objects = 1;
-  config.people = 1;
-  config.last_frame = 6;
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_rpy_head150", config, tmp);
+  const auto augmented = withMovers("fr1_rpy_head150", 2094, 1, tmp, 1, 6);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   ASSERT_TRUE(augmented->groundtruth());
   const CauseRuns r = runWithAndWithoutCause(
