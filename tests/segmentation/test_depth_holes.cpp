@@ -88,12 +88,42 @@ TEST(SensorBand, TakesTheEdgesLinesMostlyWithoutDepthUpToATenth) {
   depth.row(0).setTo(0.f);
   depth(cv::Rect(0, 0, 1, 42)).setTo(0.f);  // the left column, 70 % without depth
   depth(cv::Rect(40, 0, 1, 60)).setTo(0.f);  // a column inside the view is no band
-  const cv::Mat band = sensorBand(depth);
+  const SensorBand widths = SensorBand::of(depth);
+  EXPECT_EQ(widths.top, 1);
+  EXPECT_EQ(widths.bottom, 0);
+  EXPECT_EQ(widths.left, 1);
+  EXPECT_EQ(widths.right, 8) << "a tenth of the width";
+  const cv::Mat band = widths.pixels(depth.size());
   EXPECT_EQ(cv::countNonZero(band.col(0)), 60);
   EXPECT_EQ(cv::countNonZero(band.row(0)), 80);
   EXPECT_EQ(cv::countNonZero(band.col(72)), 60);
   EXPECT_EQ(cv::countNonZero(band(cv::Rect(68, 1, 4, 59))), 0) << "past a tenth of the width";
   EXPECT_EQ(cv::countNonZero(band(cv::Rect(40, 1, 1, 59))), 0);
+}
+
+TEST(SensorBandMedian, ARunsBandIsTheMedianSoThatANearFaceAtTheBorderIsNoBand) {
+  cv::Mat depth(60, 80, CV_32F, cv::Scalar(2.f));
+  depth(cv::Rect(76, 0, 4, 60)).setTo(0.f);  // the sensor's own band: 4 columns at the right
+  cv::Mat near_face = depth.clone();
+  near_face(cv::Rect(0, 5, 30, 55)).setTo(0.f);  // a face nearer than the range over the left border
+  cv::Mat person = depth.clone();
+  person(cv::Rect(76, 0, 4, 40)).setTo(1.5f);  // a mover in front of the band, with its depth
+  const SensorBand widened = SensorBand::of(near_face);
+  EXPECT_EQ(widened.left, 8) << "a tenth of the width, taken for band in that frame alone";
+  EXPECT_EQ(SensorBand::of(person).right, 0);
+  SensorBandMedian run;
+  EXPECT_EQ(run.median().right, 0) << "no frame yet";
+  for (int i = 0; i < 5; ++i) run.add(SensorBand::of(depth));
+  for (int i = 0; i < 2; ++i) run.add(widened);
+  for (int i = 0; i < 2; ++i) run.add(SensorBand::of(person));
+  const SensorBand band = run.median();
+  EXPECT_EQ(band.left, 0);
+  EXPECT_EQ(band.right, 4);
+  EXPECT_EQ(band.top, 0);
+  EXPECT_EQ(band.bottom, 0);
+  const cv::Mat pixels = band.pixels(depth.size());
+  EXPECT_EQ(cv::countNonZero(pixels), 4 * 60);
+  EXPECT_EQ(cv::countNonZero(pixels.colRange(76, 80)), 4 * 60);
 }
 
 // A 60 x 80 frame at 2 m with holes whose flow residual (were they static) is 8 px, grey 0.5.
@@ -118,7 +148,7 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   cv::Mat inconsistent(60, 80, CV_8U, cv::Scalar(0));
   inconsistent(cv::Rect(30, 35, 12, 6)).setTo(255);
   s.hole(cv::Rect(72, 0, 8, 60));                   // the sensor's band
-  const cv::Mat holes = holesToTest(s.depth, s.intensity);
+  const cv::Mat holes = holesToTest(s.depth, s.intensity, SensorBand::of(s.depth));
   ASSERT_FALSE(holes.empty());
   EXPECT_EQ(cv::countNonZero(holes), 3 * 144) << "the first, the third and the fifth";
   EXPECT_EQ(cv::countNonZero(holes(cv::Rect(30, 10, 12, 12))), 0) << "a black screen";
@@ -134,8 +164,8 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   HoleScene white;
   white.hole(cv::Rect(10, 10, 12, 12));
   white.intensity.setTo(0.95f);
-  EXPECT_TRUE(holesToTest(white.depth, white.intensity).empty()) << "a window";
-  EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F)), InputError);
+  EXPECT_TRUE(holesToTest(white.depth, white.intensity, SensorBand::of(white.depth)).empty()) << "a window";
+  EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F), SensorBand{}), InputError);
   EXPECT_THROW(holesMovingOnTheirOwn(holes, cv::Mat(30, 40, CV_32F), {}, 4.0), InputError);
 }
 

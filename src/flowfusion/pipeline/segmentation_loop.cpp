@@ -83,7 +83,7 @@ cv::Mat SegmentationLoop::movingHoles(const FlowField& seg_flow, const Segmentat
     return {};
   const int level = config_.pipeline.segmentation_level;
   const cv::Mat& depth = in.cur.level(level).depth;
-  const cv::Mat holes = holesToTest(depth, in.cur.level(level).intensity);
+  const cv::Mat holes = holesToTest(depth, in.cur.level(level).intensity, sensor_band_.median());
   if (holes.empty()) return {};
   // What may lie in a hole: the surfaces around it, near and far, and the stable map's.
   const DepthAround around = depthAround(depth, (depth.cols / kHoleWindowFraction) | 1);
@@ -124,6 +124,7 @@ void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, M
   const cv::Mat previous_background = std::exchange(background_, cv::Mat());
   // The flow at the segmentation level, resampled once for all of this frame's residuals.
   const FlowField seg_flow = resizeFlow(flow, cv::Size(seg_camera_.width, seg_camera_.height));
+  sensor_band_.add(SensorBand::of(in.cur.level(config_.pipeline.segmentation_level).depth));
   if (config_.consensus.enabled) restartFromFlow(in, flow, seg_flow, previous_background, estimate, timings);
   if (estimate.odometry.ok) {
     StageTimer timer(timings, "flow");

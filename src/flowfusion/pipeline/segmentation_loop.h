@@ -19,6 +19,7 @@
 #include "flowfusion/pipeline/tracking_target.h"
 #include "flowfusion/segmentation/cluster_log.h"
 #include "flowfusion/segmentation/clustering.h"
+#include "flowfusion/segmentation/depth_holes.h"
 #include "flowfusion/segmentation/held_movers.h"
 #include "flowfusion/segmentation/motion_memory.h"
 #include "flowfusion/segmentation/past_views.h"
@@ -147,6 +148,7 @@ class SegmentationLoop {
   MotionMemory memory_;  // where objects moved, for the scores' model term (scores.model_memory_s)
   PastViews past_views_;  // what earlier frames saw, for the same term (scores.model_views)
   HeldMovers held_movers_;  // movers seen moving clearly, held where they stand (scores.hold_seen_moving_s)
+  SensorBandMedian sensor_band_;  // the run's frames' bands (segmentation level)
   struct LongBaselineFrame {
     FlowField flow;  // to its previous frame, at the segmentation level
     cv::Mat depth;   // at the segmentation level, for hiddenIn
