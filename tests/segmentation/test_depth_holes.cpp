@@ -57,6 +57,28 @@ TEST(DepthHoles, TheShareDecidesAndAFrameWithoutDepthIsLeftAsItIs) {
   EXPECT_EQ(cv::countNonZero(mask != s.mask), 0);
 }
 
+TEST(DepthHoles, TheSensorsBandIsNeverMarkedButCountsInItsHole) {
+  // A face without depth from the square's right side to a band of 4 columns at the image's right
+  // edge. Its neighbours with depth: 6 of the square's, 32 static ones above and below the face and
+  // 24 beside the band (a share of 0.10).
+  Scene s;
+  s.hole(cv::Rect(36, 0, 4, 30));  // the band
+  s.hole(cv::Rect(20, 8, 16, 6));  // the face
+  cv::Mat band(30, 40, CV_8U, cv::Scalar(0));
+  band.colRange(36, 40).setTo(255);
+  cv::Mat without = s.mask.clone();
+  fillDepthHoles(without, s.depth, 0.09);
+  EXPECT_EQ(cv::countNonZero(without.colRange(36, 40)), 4 * 30) << "the whole band marked with the face";
+  cv::Mat with = s.mask.clone();
+  fillDepthHoles(with, s.depth, 0.09, band);
+  EXPECT_EQ(cv::countNonZero(with(cv::Rect(20, 8, 16, 6))), 16 * 6);
+  EXPECT_EQ(cv::countNonZero(with.colRange(36, 40)), 0) << "the band stays as the scores left it";
+  cv::Mat strict = s.mask.clone();
+  fillDepthHoles(strict, s.depth, 0.15, band);
+  EXPECT_EQ(cv::countNonZero(strict(cv::Rect(20, 8, 16, 6))), 0) << "the band's neighbours still count";
+  EXPECT_THROW(fillDepthHoles(with, s.depth, 0.15, cv::Mat(10, 10, CV_8U)), InputError);
+}
+
 TEST(DepthHoles, RejectsMismatchedImagesAndShares) {
   Scene s;
   cv::Mat small(10, 10, CV_8U, cv::Scalar(0));

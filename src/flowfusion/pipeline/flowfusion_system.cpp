@@ -161,14 +161,17 @@ void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedSc
   // Only the written mask: the tracking and the map have used the scores, and pixels without depth
   // are nothing either can use.
   const PipelineOptions& opt = config_.pipeline;
+  // A segmentation-level image at the mask's size, pixel for pixel (empty stays empty).
+  const auto atMaskSize = [&mask](const cv::Mat& level_image) {
+    cv::Mat out;
+    if (!level_image.empty()) cv::resize(level_image, out, mask.size(), 0, 0, cv::INTER_NEAREST);
+    return out;
+  };
   if (opt.mask_map_agreement) clearMapAgreement(mask, tracked.map_agreement);
-  cv::Mat keep;
-  if (!tracked.seen_moving.empty()) cv::resize(tracked.seen_moving, keep, mask.size(), 0, 0, cv::INTER_NEAREST);
-  dropSmallInteriorRegions(mask, opt.mask_min_region, keep);
-  if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share);
+  dropSmallInteriorRegions(mask, opt.mask_min_region, atMaskSize(tracked.seen_moving));
+  if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share, atMaskSize(tracked.sensor_band));
   if (!tracked.moving_holes.empty()) {
-    cv::Mat moving;
-    cv::resize(tracked.moving_holes, moving, mask.size(), 0, 0, cv::INTER_NEAREST);
+    cv::Mat moving = atMaskSize(tracked.moving_holes);
     moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
     markHolesBesideMovers(mask, moving);
   }
@@ -212,7 +215,7 @@ FlowFusionSystem::TrackedScores FlowFusionSystem::track(const RgbdFrame& frame, 
   result.T_world_cam = orthonormalized(target.T_world_target * estimate.T_target_cur);
   T_prev_cur_velocity_ = prev.T_world_cam.inverse() * result.T_world_cam;
   velocity_dt_ = frame.depthTime() - prev.frame.depthTime();
-  return {estimate.scores, estimate.map_agreement, estimate.seen_moving, estimate.moving_holes,
+  return {estimate.scores, estimate.map_agreement, estimate.seen_moving, estimate.moving_holes, estimate.sensor_band,
           std::move(estimate.cluster_log)};
 }
 

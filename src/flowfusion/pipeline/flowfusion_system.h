@@ -120,6 +120,7 @@ class FlowFusionSystem {
     cv::Mat map_agreement;
     cv::Mat seen_moving;  // MotionEstimate::seen_moving
     cv::Mat moving_holes;  // MotionEstimate::moving_holes
+    cv::Mat sensor_band;   // MotionEstimate::sensor_band
     ClusterLog clusters;
   };
   // Odometry and segmentation against the target.

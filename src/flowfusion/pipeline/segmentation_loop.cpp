@@ -125,6 +125,7 @@ void SegmentationLoop::run(const SegmentationInput& in, const FrameCues& cues, M
   // The flow at the segmentation level, resampled once for all of this frame's residuals.
   const FlowField seg_flow = resizeFlow(flow, cv::Size(seg_camera_.width, seg_camera_.height));
   sensor_band_.add(SensorBand::of(in.cur.level(config_.pipeline.segmentation_level).depth));
+  estimate.sensor_band = sensor_band_.median().pixels(seg_flow.uv.size());
   if (config_.consensus.enabled) restartFromFlow(in, flow, seg_flow, previous_background, estimate, timings);
   if (estimate.odometry.ok) {
     StageTimer timer(timings, "flow");

@@ -16,9 +16,10 @@ bool hasDepth(float z) { return z > 0; }  // false for NaN too
 
 }  // namespace
 
-void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_share) {
-  if (mask.type() != CV_8UC1 || depth.type() != CV_32FC1 || mask.size() != depth.size())
-    throw InputError("fillDepthHoles: the mask must be CV_8UC1 and the depth CV_32FC1 of the same size");
+void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_share, const cv::Mat& band) {
+  if (mask.type() != CV_8UC1 || depth.type() != CV_32FC1 || mask.size() != depth.size() ||
+      (!band.empty() && (band.type() != CV_8UC1 || band.size() != depth.size())))
+    throw InputError("fillDepthHoles: the mask and the band must be CV_8UC1 and the depth CV_32FC1 of one size");
   if (!(min_dynamic_share > 0 && min_dynamic_share <= 1))
     throw InputError("fillDepthHoles: min_dynamic_share must be in (0, 1]");
   cv::Mat holes(depth.size(), CV_8U);
@@ -54,6 +55,7 @@ void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_shar
     fill[r] = neighbours[r] > 0 && dynamic[r] >= min_dynamic_share * neighbours[r];
     any = any || fill[r];
   }
+  if (!band.empty()) regions.setTo(0, band);  // label 0: the pixels with depth, never chosen
   if (any) setChosenRegions(mask, regions, fill, 255);
 }
 

@@ -16,9 +16,12 @@ namespace ff {
 
 // Marks (255) every 4-connected region of `depth` without a valid value (<= 0 or NaN; CV_32F,
 // metres) in `mask` (CV_8U, same size, > 0 = dynamic) when at least `min_dynamic_share` (in (0, 1])
-// of its 4-neighbours with depth are dynamic there; the image border is no neighbour. Other pixels
-// keep their label. Throws InputError on mismatched sizes or types or a share outside (0, 1].
-void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_share);
+// of its 4-neighbours with depth are dynamic there; the image border is no neighbour. The pixels of
+// `band` (CV_8U, > 0; the sensor's band, SensorBand::pixels; optional) are never marked: a hole
+// that runs into the band is judged as it is, but the band beside a mover at the image's edge is
+// the static world's as often (its true label is unknown to the sensor). Other pixels keep theirs.
+// Throws InputError on mismatched sizes or types or a share outside (0, 1].
+void fillDepthHoles(cv::Mat& mask, const cv::Mat& depth, double min_dynamic_share, const cv::Mat& band = {});
 
 // The nearest and the farthest valid depth within a window_px x window_px square around each pixel
 // of `depth` (CV_32F, metres), 0 where the square has none: what may lie at a pixel without depth,
