@@ -170,7 +170,7 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   cv::Mat inconsistent(60, 80, CV_8U, cv::Scalar(0));
   inconsistent(cv::Rect(30, 35, 12, 6)).setTo(255);
   s.hole(cv::Rect(72, 0, 8, 60));                   // the sensor's band
-  const cv::Mat holes = holesToTest(s.depth, s.intensity, SensorBand::of(s.depth));
+  const cv::Mat holes = holesToTest(s.depth, s.intensity, SensorBand::of(s.depth).pixels(s.depth.size()));
   ASSERT_FALSE(holes.empty());
   EXPECT_EQ(cv::countNonZero(holes), 3 * 144) << "the first, the third and the fifth";
   EXPECT_EQ(cv::countNonZero(holes(cv::Rect(30, 10, 12, 12))), 0) << "a black screen";
@@ -186,8 +186,10 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   HoleScene white;
   white.hole(cv::Rect(10, 10, 12, 12));
   white.intensity.setTo(0.95f);
-  EXPECT_TRUE(holesToTest(white.depth, white.intensity, SensorBand::of(white.depth)).empty()) << "a window";
-  EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F), SensorBand{}), InputError);
+  const cv::Mat no_band(60, 80, CV_8U, cv::Scalar(0));
+  EXPECT_TRUE(holesToTest(white.depth, white.intensity, no_band).empty()) << "a window";
+  EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F), no_band), InputError);
+  EXPECT_THROW(holesToTest(s.depth, s.intensity, cv::Mat()), InputError);
   EXPECT_THROW(holesMovingOnTheirOwn(holes, cv::Mat(30, 40, CV_32F), {}, 4.0), InputError);
 }
 

@@ -42,8 +42,9 @@ struct MotionEstimate {
   // pipeline.mask_hole_flow_px), at the segmentation level; the written mask takes those beside its
   // movers. Empty when none
   cv::Mat moving_holes;
-  // 255 on the sensor's band (the run's median width, SensorBandMedian) at the segmentation level,
-  // which the written mask's hole fill leaves as the scores left it; empty before a scored frame
+  // 255 on the sensor's band (the run's median width, SensorBandMedian) at the segmentation level:
+  // no hole there is tested for its own motion, and the written mask's hole fill leaves it as the
+  // scores left it; empty before a scored frame
   cv::Mat sensor_band;
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)
