@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The real scene set of issue 29 (docs/scenes.md, "Judging a change on real frames"): movers
-# composited into the real TUM frames of ../shared/data/tum by `augment` (generator version 2), each
+# composited into the real TUM frames of ../shared/data/tum by `augment` (generator version 3), each
 # with the real static sequence as its twin, and the two static sequences themselves. The first seven
 # are the scenes the pipeline was tuned on, the last four were made only to check it. Reproducible
 # from the seeds below.

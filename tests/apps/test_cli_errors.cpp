@@ -53,6 +53,21 @@ TEST(CliErrors, BadSettingValue) {
   EXPECT_FALSE(fs::exists(tmp.path() / "out"));
 }
 
+// A mode of the generators named by --set is one of its names, not silently the first one.
+TEST(CliErrors, UnknownModeName) {
+  testing::TempDir tmp;
+  const auto synth = testing::runFlowfusion("synth " + shellArg(tmp.path() / "synth") + " --frames 2 --set camera_motion=spin");
+  EXPECT_EQ(synth.status, 2) << synth.output;
+  EXPECT_NE(synth.output.find("camera_motion must be handheld or rpy"), std::string::npos) << synth.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "synth"));
+  const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
+  const auto augment = testing::runFlowfusion("augment " + shellArg(seq) + " " + shellArg(tmp.path() / "aug") +
+                                              " --set holes=open");
+  EXPECT_EQ(augment.status, 2) << augment.output;
+  EXPECT_NE(augment.output.find("holes must be enclosed or black_surfaces"), std::string::npos) << augment.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "aug"));
+}
+
 TEST(CliErrors, UnknownSetting) {
   testing::TempDir tmp;
   const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();

@@ -244,6 +244,9 @@ TEST(RealFrames, SmallMarksInsideTheViewOfStaticFr1RpyAreNotWritten) {
 
 // `people` walkers and `objects` boxes composited by augment (seed) into the shared real sequence
 // `head` (its frames up to last_frame, -1: all), written to `out`; nullopt when ../shared is absent.
+// The cause tests made before generator version 3 keep their scenes with version 2's hole test
+// (synth::HoleTest::Enclosed: a person shows through a black screen too large to be enclosed),
+// where their causes show.
 std::optional<TumSequence> withMovers(const std::string& head, synth::AugmentConfig config, const testing::TempDir& out) {
   const auto dir = testing::sharedTum(head);
   if (!dir) return std::nullopt;
@@ -251,8 +254,10 @@ std::optional<TumSequence> withMovers(const std::string& head, synth::AugmentCon
   return TumSequence::open(out.str());
 }
 std::optional<TumSequence> withMovers(const std::string& head, unsigned seed, int people, const testing::TempDir& out,
-                                      int objects = 0, int last_frame = -1) {
+                                      int objects = 0, int last_frame = -1,
+                                      synth::HoleTest holes = synth::HoleTest::BlackSurfaces) {
   synth::AugmentConfig config;
+  config.holes = holes;
   config.seed = seed;
   config.objects = objects;
   config.people = people;
@@ -301,14 +306,15 @@ void expectSamePoses(const RunAgainstTruth& a, const RunAgainstTruth& b) {
     EXPECT_TRUE(a.trajectory[i].T_world_cam.isApprox(b.trajectory[i].T_world_cam, 1e-12)) << "frame " << i;
 }
 
-// fr1/rpy with `people` walkers composited by augment (seed): frames first..last on average at most
+// fr1/rpy with `people` walkers composited by augment (seed, version 2's hole test: both causes
+// below began with the person drawn through the black monitor): frames first..last on average at most
 // 0.5 % falsely marked (against the true masks) with the defaults and more than 1.5 % with `undo` (the
 // cause the default fixes). Both causes below were first marked by the fast start's mover group,
 // which consensus.start_min_separation no longer takes: they are shown with it back.
 void expectFixedWithPeople(unsigned seed, int people, int first, int last, void (*undo)(SystemConfig&),
                            const char* why) {
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_rpy_head150", seed, people, tmp);
+  const auto augmented = withMovers("fr1_rpy_head150", seed, people, tmp, 0, -1, synth::HoleTest::Enclosed);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence& seq = *augmented;
   SystemConfig config;
@@ -355,9 +361,10 @@ TEST(RealFrames, APersonWalkingWithTheCamerasPanIsFoundOverALongerBaseline) {
   // (0.58 against 0.14 with the paper's alpha_F and DIS fast; 0.93 before the chain's noise was
   // scaled, scores.long_baseline_noise_px: frames 107-110 find less of the person, 0.25-0.61).
   // Without the hold of scores.hold_seen_moving_s, which keeps part of the person the long
-  // baseline once found (0.49 with one frame pair alone).
+  // baseline once found (0.49 with one frame pair alone). Version 2's hole test: at version 3 the
+  // black monitor hides part of the person, and what shows is found with one frame pair too.
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_xyz_head300", 91, 2, tmp);
+  const auto augmented = withMovers("fr1_xyz_head300", 91, 2, tmp, 0, -1, synth::HoleTest::Enclosed);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const TumSequence& seq = *augmented;
   SystemConfig config;
@@ -398,9 +405,10 @@ TEST(RealFrames, APersonFoundBeforeARestartFromTheFlowIsNotLost) {
   // the person: 0.97. (From frame 12 only a sliver of the person, without depth, shows at the top
   // edge, its image motion close to the camera's (flow residual 0.3 px): nothing says it moves, and
   // how long the carried score outlasts that follows small differences of the poses: to frame 15
-  // with a 6-DoF odometry, to frame 11 with the depth offset.)
+  // with a 6-DoF odometry, to frame 11 with the depth offset.) Version 2's hole test: at version 3
+  // the black monitor hides most of the person in frames 7-12.
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_rpy_head150", 2901, 1, tmp);
+  const auto augmented = withMovers("fr1_rpy_head150", 2901, 1, tmp, 0, -1, synth::HoleTest::Enclosed);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   SystemConfig config;
   EXPECT_GT(meanIoU(*augmented, config, 7, 11), 0.8) << "frames 7-11 with the movers carried";
@@ -515,9 +523,10 @@ TEST(RealFrames, ABoxOverHalfTheFirstViewIsTheMoverNotTheDesk) {
   // start took the box for the world and the desk for the mover: frames 1-14 mean IoU 0.18 (0.06
   // since the previous frame's movers count as in front of the map, consensus.previous_movers_in_front,
   // which then holds the swapped roles). Of two groups of comparable size the nearer moves
-  // (consensus.nearer_mover_depth_ratio): 0.42, the desk no longer marked from frame 5.
+  // (consensus.nearer_mover_depth_ratio): 0.42, the desk no longer marked from frame 5. Version 2's
+  // hole test: at version 3 the start does not swap the roles here even without the rule.
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_rpy_head150", 2094, 1, tmp, 1);
+  const auto augmented = withMovers("fr1_rpy_head150", 2094, 1, tmp, 1, -1, synth::HoleTest::Enclosed);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   const CauseRuns r = runWithAndWithoutCause(
       *augmented, SystemConfig{}, [](SystemConfig& c) { c.consensus.nearer_mover_depth_ratio = 0; }, 1, 14);
@@ -554,9 +563,10 @@ TEST(RealFrames, AUniformBoxOverHalfTheFirstViewIsNotTakenForTheWorld) {
   // and the odometry followed the box. Counted over the samples where the image is textured (78
   // against 116; the box's flow is filled in from its outline), the desk's is the world's motion
   // (consensus.start_min_texture): frames 1-6 mean IoU 0.88 against 0.28, frames 0-6 ATE 6.8 mm
-  // against 10.4 mm.
+  // against 10.4 mm. Version 2's hole test: the person that version 3 hides behind the monitor
+  // changes the start's groups.
   const testing::TempDir tmp;
-  const auto augmented = withMovers("fr1_rpy_head150", 2094, 1, tmp, 1, 6);
+  const auto augmented = withMovers("fr1_rpy_head150", 2094, 1, tmp, 1, 6, synth::HoleTest::Enclosed);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
   ASSERT_TRUE(augmented->groundtruth());
   const CauseRuns r = runWithAndWithoutCause(

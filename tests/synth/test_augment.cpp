@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -104,15 +105,22 @@ TEST(Augment, PeopleWalkInViewWithExactMasks) {
 
 namespace {
 
-// Cuts a hole of half-size r px centred at `centre` into every depth image of a static sequence,
-// and sets the 2-px ring around it to ring_m metres (0: the ring keeps the real depth).
-void cutEnclosedHole(const std::string& dir, cv::Point centre, int r, double ring_m) {
+// Cuts `hole` (clipped to the image) into every depth image of a static sequence and sets the 2-px
+// ring around it to ring_m metres (0: the ring keeps the real depth); with `paint`, the colour
+// images get that colour inside the hole.
+void cutHole(const std::string& dir, const cv::Rect& hole, double ring_m, std::optional<cv::Scalar> paint = {}) {
   for (const auto& entry : fs::directory_iterator(fs::path(dir) / "depth")) {
     cv::Mat depth = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
-    const cv::Rect hole(centre.x - r, centre.y - r, 2 * r, 2 * r), ring(hole.x - 2, hole.y - 2, hole.width + 4, hole.height + 4);
-    if (ring_m > 0) depth(ring & cv::Rect(0, 0, depth.cols, depth.rows)).setTo(cv::Scalar(ring_m * 5000.0));
-    depth(hole & cv::Rect(0, 0, depth.cols, depth.rows)).setTo(cv::Scalar(0));
+    const cv::Rect image(0, 0, depth.cols, depth.rows), ring(hole.x - 2, hole.y - 2, hole.width + 4, hole.height + 4);
+    if (ring_m > 0) depth(ring & image).setTo(cv::Scalar(ring_m * 5000.0));
+    depth(hole & image).setTo(cv::Scalar(0));
     cv::imwrite(entry.path().string(), depth);
+  }
+  if (!paint) return;
+  for (const auto& entry : fs::directory_iterator(fs::path(dir) / "rgb")) {
+    cv::Mat color = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
+    color(hole & cv::Rect(0, 0, color.cols, color.rows)).setTo(*paint);
+    cv::imwrite(entry.path().string(), color);
   }
 }
 
@@ -125,6 +133,27 @@ int maskPixelsIn(const std::string& dir, size_t index, const cv::Rect& box) {
 
 }  // namespace
 
+namespace {
+
+// The frame of an augmented sequence where the objects cover the most, and their centroid there.
+struct MostCovered {
+  size_t frame = 0;
+  cv::Point centre;
+  double pixels = 0;
+};
+MostCovered mostCovered(const std::string& dir) {
+  const auto seq = ff::TumSequence::open(dir);
+  MostCovered best;
+  for (size_t i = 0; i < seq.size(); ++i) {
+    const cv::Moments mo = cv::moments(maskAt(seq, seq.load(i).timestamp), true);
+    if (mo.m00 > best.pixels)
+      best = {i, cv::Point(static_cast<int>(mo.m10 / mo.m00), static_cast<int>(mo.m01 / mo.m00)), mo.m00};
+  }
+  return best;
+}
+
+}  // namespace
+
 // A hole in the real depth that nearer valid depth encloses (a black screen's speckles) hides the
 // objects behind that surface; a hole in a far wall shows them.
 TEST(Augment, AHoleEnclosedByNearerDepthHidesTheObjectsBehindIt) {
@@ -132,29 +161,52 @@ TEST(Augment, AHoleEnclosedByNearerDepthHidesTheObjectsBehindIt) {
   const std::string in = writeStatic(tmp.path() / "static");
   const std::string plain = (tmp.path() / "plain").string();
   ff::synth::augmentSequence(in, plain, noiseless());
-  // The frame and place where the objects cover the most: the hole goes there.
-  const auto seq = ff::TumSequence::open(plain);
-  size_t best = 0;
-  cv::Mat best_mask;
-  for (size_t i = 0; i < seq.size(); ++i) {
-    const cv::Mat m = maskAt(seq, seq.load(i).timestamp);
-    if (best_mask.empty() || cv::countNonZero(m) > cv::countNonZero(best_mask)) best = i, best_mask = m;
-  }
-  const cv::Moments mo = cv::moments(best_mask, true);
-  ASSERT_GT(mo.m00, 400) << "the objects cover a hole's worth of one frame";
-  const cv::Point centre(static_cast<int>(mo.m10 / mo.m00), static_cast<int>(mo.m01 / mo.m00));
+  // The hole goes where the objects cover the most.
+  const MostCovered best = mostCovered(plain);
+  ASSERT_GT(best.pixels, 400) << "the objects cover a hole's worth of one frame";
   const int r = 8;
-  const cv::Rect hole(centre.x - r, centre.y - r, 2 * r, 2 * r);
-  ASSERT_GT(maskPixelsIn(plain, best, hole), 50) << "the objects cover the hole's place";
+  const cv::Rect hole(best.centre.x - r, best.centre.y - r, 2 * r, 2 * r);
+  ASSERT_GT(maskPixelsIn(plain, best.frame, hole), 50) << "the objects cover the hole's place";
 
   const std::string in_wall = writeStatic(tmp.path() / "wall"), in_screen = writeStatic(tmp.path() / "screen");
-  cutEnclosedHole(in_wall, centre, r, 0);
-  cutEnclosedHole(in_screen, centre, r, 0.3);
+  cutHole(in_wall, hole, 0);
+  cutHole(in_screen, hole, 0.3);
   const std::string out_wall = (tmp.path() / "aug_wall").string(), out_screen = (tmp.path() / "aug_screen").string();
   ff::synth::augmentSequence(in_wall, out_wall, noiseless());
   ff::synth::augmentSequence(in_screen, out_screen, noiseless());
-  EXPECT_GT(maskPixelsIn(out_wall, best, hole), 50) << "objects show through a hole in the wall behind them";
-  EXPECT_EQ(maskPixelsIn(out_screen, best, hole), 0) << "a screen 0.3 m away hides what lies behind its hole";
+  EXPECT_GT(maskPixelsIn(out_wall, best.frame, hole), 50) << "objects show through a hole in the wall behind them";
+  EXPECT_EQ(maskPixelsIn(out_screen, best.frame, hole), 0) << "a screen 0.3 m away hides what lies behind its hole";
+}
+
+// A black surface returns no depth: a hole on black pixels that the image's edge cuts (a black
+// screen at the border, too large for its own frame to enclose) continues the surface beside it and
+// hides the objects behind that; the same hole on grey pixels (the room beyond the sensor's range)
+// shows them (generator version 3; HoleTest::Enclosed, version 2's test, shows them in both).
+TEST(Augment, AHoleOnBlackPixelsCutByTheImagesEdgeHidesTheObjectsBehindTheSurfaceBesideIt) {
+  ff::testing::TempDir tmp;
+  const std::string plain = (tmp.path() / "plain").string();
+  ff::synth::augmentSequence(writeStatic(tmp.path() / "static"), plain, noiseless());
+  const MostCovered best = mostCovered(plain);
+  ASSERT_GT(best.pixels, 400) << "the objects cover a hole's worth of one frame";
+  // From just left of the objects' centre to the right edge, taller than the reach (a tenth of the
+  // width) that encloses a hole from above and below; judged in its middle.
+  const cv::Rect hole(best.centre.x - 4, best.centre.y - 20, 10000, 40), middle(best.centre.x - 2, best.centre.y - 3, 6, 6);
+  ASSERT_GT(maskPixelsIn(plain, best.frame, middle), 10) << "the objects cover the hole's middle";
+
+  const std::string in_black = writeStatic(tmp.path() / "black"), in_grey = writeStatic(tmp.path() / "grey");
+  cutHole(in_black, hole, 0.3, cv::Scalar(0, 0, 0));
+  cutHole(in_grey, hole, 0.3, cv::Scalar(128, 128, 128));
+  const std::string out_black = (tmp.path() / "aug_black").string(), out_grey = (tmp.path() / "aug_grey").string();
+  ff::synth::augmentSequence(in_black, out_black, noiseless());
+  ff::synth::augmentSequence(in_grey, out_grey, noiseless());
+  EXPECT_EQ(maskPixelsIn(out_black, best.frame, middle), 0) << "a black screen 0.3 m away hides what lies behind it";
+  EXPECT_GT(maskPixelsIn(out_grey, best.frame, middle), 10) << "objects show in a grey hole open to the image's edge";
+
+  auto version2 = noiseless();
+  version2.holes = ff::synth::HoleTest::Enclosed;
+  const std::string out_version2 = (tmp.path() / "aug_version2").string();
+  ff::synth::augmentSequence(in_black, out_version2, version2);
+  EXPECT_GT(maskPixelsIn(out_version2, best.frame, middle), 10) << "version 2's test shows them through the black hole";
 }
 
 TEST(Augment, DropsFramesWithoutGroundTruthPose) {

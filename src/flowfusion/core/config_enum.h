@@ -42,8 +42,10 @@ E enumFromName(const std::string& name) {
 }  // namespace ff
 
 // In namespace ff, after the enum: FLOWFUSION_CONFIG_ENUM(TrackingMode, "pipeline.tracking",
-// {TrackingMode::FrameToFrame, "frame_to_frame"}, ...).
-#define FLOWFUSION_CONFIG_ENUM(E, SETTING, ...)                                          \
+// {TrackingMode::FrameToFrame, "frame_to_frame"}, ...). An enum of a nested namespace (ff::synth)
+// takes its names in namespace ff, FLOWFUSION_CONFIG_ENUM_NAMES(synth::E, ...), and its JSON in
+// its own namespace, FLOWFUSION_CONFIG_ENUM_JSON(E), where the JSON library looks for it.
+#define FLOWFUSION_CONFIG_ENUM_NAMES(E, SETTING, ...)                                    \
   template <>                                                                            \
   struct ConfigEnum<E> {                                                                 \
     static constexpr const char* setting = SETTING;                                      \
@@ -51,9 +53,15 @@ E enumFromName(const std::string& name) {
       static const std::vector<std::pair<E, std::string>> n = {__VA_ARGS__};             \
       return n;                                                                          \
     }                                                                                    \
-  };                                                                                     \
-  inline void to_json(nlohmann::json& j, const E& e) { j = enumName(e); }                \
+  };
+#define FLOWFUSION_CONFIG_ENUM_JSON(E)                                                   \
+  inline void to_json(nlohmann::json& j, const E& e) { j = ::ff::enumName(e); }          \
   inline void from_json(const nlohmann::json& j, E& e) {                                 \
-    if (!j.is_string()) throw InputError(std::string(SETTING) + " must be a name: " + enumChoices<E>()); \
-    e = enumFromName<E>(j.get<std::string>());                                           \
+    if (!j.is_string())                                                                  \
+      throw ::ff::InputError(std::string(::ff::ConfigEnum<E>::setting) + " must be a name: " + \
+                             ::ff::enumChoices<E>());                                    \
+    e = ::ff::enumFromName<E>(j.get<std::string>());                                     \
   }
+#define FLOWFUSION_CONFIG_ENUM(E, SETTING, ...)      \
+  FLOWFUSION_CONFIG_ENUM_NAMES(E, SETTING, __VA_ARGS__) \
+  FLOWFUSION_CONFIG_ENUM_JSON(E)

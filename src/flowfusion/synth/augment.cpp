@@ -113,50 +113,76 @@ struct Composite {
   cv::Mat mask;  // CV_8U, 255 = a pasted (moving) pixel
 };
 
-// Along each row (transpose for columns): the nearest valid depth within reach_px before and after
-// every pixel, the farther of the two (0 where either side has none).
-cv::Mat boundedHoleDepthRows(const cv::Mat& depth, int reach_px) {
-  cv::Mat out(depth.size(), CV_32F, cv::Scalar(0));
-  std::vector<float> before(depth.cols);
+// Along each row (transpose for columns), per pixel without depth, from the nearest valid depth
+// before and after it: `enclosed` the farther of the two where both lie within reach_px (else 0),
+// `beside` the nearer of those found at any distance along the line (0 where neither is).
+struct HoleSides {
+  cv::Mat enclosed, beside;  // CV_32F
+};
+HoleSides holeSidesAlongRows(const cv::Mat& depth, int reach_px) {
+  HoleSides out{cv::Mat(depth.size(), CV_32F, cv::Scalar(0)), cv::Mat(depth.size(), CV_32F, cv::Scalar(0))};
+  std::vector<int> last_before(depth.cols);
   for (int v = 0; v < depth.rows; ++v) {
     const float* z = depth.ptr<float>(v);
-    float* o = out.ptr<float>(v);
+    float* enclosed = out.enclosed.ptr<float>(v);
+    float* beside = out.beside.ptr<float>(v);
     for (int u = 0, last = -1; u < depth.cols; ++u) {
       if (z[u] > 0) last = u;
-      before[u] = last >= 0 && u - last <= reach_px ? z[last] : 0.f;
+      last_before[u] = last;
     }
     for (int u = depth.cols - 1, next = -1; u >= 0; --u) {
       if (z[u] > 0) next = u;
-      const float after = next >= 0 && next - u <= reach_px ? z[next] : 0.f;
-      o[u] = before[u] > 0 && after > 0 ? std::max(before[u], after) : 0.f;
+      const int last = last_before[u];
+      const float before = last >= 0 ? z[last] : 0.f, after = next >= 0 ? z[next] : 0.f;
+      const bool both_near = last >= 0 && u - last <= reach_px && next >= 0 && next - u <= reach_px;
+      enclosed[u] = both_near ? std::max(before, after) : 0.f;
+      beside[u] = before > 0 && after > 0 ? std::min(before, after) : std::max(before, after);
     }
   }
   return out;
 }
 
+HoleSides holeSidesAlongColumns(const cv::Mat& depth, int reach_px) {
+  const HoleSides t = holeSidesAlongRows(depth.t(), reach_px);
+  HoleSides out;
+  cv::transpose(t.enclosed, out.enclosed);
+  cv::transpose(t.beside, out.beside);
+  return out;
+}
+
+// The nearer of two depths where both are valid, else the valid one (0: neither).
+float nearerValid(float a, float b) { return a > 0 && b > 0 ? std::min(a, b) : std::max(a, b); }
+
 // The depth in front of which a pasted object shows, per pixel: the real depth where the sensor
 // measured one; in a hole, the surface the hole lies within, when valid depth encloses it on both
 // sides of a row or of a column within reach_px (a black monitor's speckles: a person behind the
-// monitor stays hidden where its screen returned nothing); 0 (shows) in a hole open to one side,
-// such as the shadow beside a depth edge or the sensor's invalid band at the image border.
-cv::Mat occludingDepth(const cv::Mat& depth, int reach_px) {
-  const cv::Mat rows = boundedHoleDepthRows(depth, reach_px);
-  cv::Mat cols_t;
-  cv::transpose(boundedHoleDepthRows(depth.t(), reach_px), cols_t);
+// monitor stays hidden where its screen returned nothing). A hole open to one side, such as the
+// shadow beside a depth edge or the sensor's invalid band at the image border, shows the object
+// (0), unless the real colour there is black (grey below kBlackGrey): a black surface returns no
+// depth, so a black screen too large to be enclosed, or cut by the image's edge, is taken to
+// continue the nearest surface beside it along its row or column, its own frame (HoleTest::
+// BlackSurfaces; HoleTest::Enclosed leaves such holes open, as generator version 2 did).
+cv::Mat occludingDepth(const cv::Mat& depth, const cv::Mat& color, int reach_px, HoleTest holes) {
+  const HoleSides rows = holeSidesAlongRows(depth, reach_px), cols = holeSidesAlongColumns(depth, reach_px);
+  cv::Mat grey;
+  cv::cvtColor(color, grey, cv::COLOR_BGR2GRAY);
+  const int black = static_cast<int>(kBlackGrey * 255.f);
   cv::Mat out = depth.clone();
   for (int v = 0; v < depth.rows; ++v)
     for (int u = 0; u < depth.cols; ++u) {
       if (depth.at<float>(v, u) > 0) continue;
-      const float a = rows.at<float>(v, u), b = cols_t.at<float>(v, u);
-      out.at<float>(v, u) = a > 0 && b > 0 ? std::min(a, b) : std::max(a, b);
+      float z = nearerValid(rows.enclosed.at<float>(v, u), cols.enclosed.at<float>(v, u));
+      if (z == 0 && holes == HoleTest::BlackSurfaces && grey.at<uchar>(v, u) < black) z = nearerValid(rows.beside.at<float>(v, u), cols.beside.at<float>(v, u));
+      out.at<float>(v, u) = z;
     }
   return out;
 }
 
-Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt) {
+Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt, HoleTest holes) {
   const cv::Mat obj_color = finishColor(layer.color, opt);
   const cv::Mat obj_depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
-  const cv::Mat z_front = occludingDepth(real.depth, std::max(1, real.depth.cols / kHoleReachFraction));
+  const cv::Mat z_front =
+      occludingDepth(real.depth, real.color, std::max(1, real.depth.cols / kHoleReachFraction), holes);
   Composite c{real.color.clone(), real.depth.clone(), cv::Mat(real.depth.rows, real.depth.cols, CV_8U, cv::Scalar(0))};
   for (int v = 0; v < c.mask.rows; ++v)
     for (int u = 0; u < c.mask.cols; ++u) {
@@ -226,7 +252,7 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
     const RgbdFrame real = seq.load(index);
     const double t = real.timestamp;
     opt.noise_key = hashCombine(hashCombine(config.seed, kAugmentNoise), static_cast<uint64_t>(std::llround(t * 1e6)));
-    const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt);
+    const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt, config.holes);
     // The real depth keeps its own time: out of step with the colour, as the sensor took it.
     writer.add(t, c.color, c.depth, T_world_cam, c.mask, real.depth_timestamp);
   }

@@ -24,25 +24,52 @@
 #include <vector>
 
 #include "flowfusion/core/camera.h"
+#include "flowfusion/core/config_enum.h"
 #include "flowfusion/core/rgbd_frame.h"
 #include "flowfusion/core/se3.h"
 #include "flowfusion/io/tum_sequence.h"
 
 namespace ff::synth {
 
-// Bumped whenever the same seed would produce different images; written to scene.json.
-inline constexpr int kGeneratorVersion = 2;
-
 // How the camera moves: a hand-held sweep (mostly yaw, as TUM fr1/xyz, fr3 walking_xyz) or fast
 // rotation about all three axes with little translation (as TUM fr1/rpy, fr3 walking_rpy).
 enum class CameraMotion { Handheld, Rpy };
-NLOHMANN_JSON_SERIALIZE_ENUM(CameraMotion, {{CameraMotion::Handheld, "handheld"}, {CameraMotion::Rpy, "rpy"}})
 
 // Where the camera goes: the hand-held sweep about the room's centre, or a loop round a circle of
 // kLoopRadiusM about it, looking outwards (to see the same places again: loop closure).
 enum class CameraPathKind { Sweep, Loop };
-NLOHMANN_JSON_SERIALIZE_ENUM(CameraPathKind, {{CameraPathKind::Sweep, "sweep"}, {CameraPathKind::Loop, "loop"}})
 inline constexpr double kLoopRadiusM = 0.6;
+
+// What a hole in the real depth (a pixel the sensor returned nothing for) hides of a pasted object.
+enum class HoleTest {
+  // Only what lies behind valid depth enclosing the hole on both sides of its row or column within
+  // a tenth of the image's width (generator version 2: a person showed through a black screen too
+  // large for its speckles to enclose, or cut by the image's edge).
+  Enclosed,
+  // Besides, on black pixels (a black surface returns no depth), what lies behind the nearest surface
+  // beside the hole along its row or column (generator version 3).
+  BlackSurfaces,
+};
+
+}  // namespace ff::synth
+
+namespace ff {
+FLOWFUSION_CONFIG_ENUM_NAMES(synth::CameraMotion, "camera_motion", {synth::CameraMotion::Handheld, "handheld"},
+                             {synth::CameraMotion::Rpy, "rpy"})
+FLOWFUSION_CONFIG_ENUM_NAMES(synth::CameraPathKind, "camera_path", {synth::CameraPathKind::Sweep, "sweep"},
+                             {synth::CameraPathKind::Loop, "loop"})
+FLOWFUSION_CONFIG_ENUM_NAMES(synth::HoleTest, "holes", {synth::HoleTest::Enclosed, "enclosed"},
+                             {synth::HoleTest::BlackSurfaces, "black_surfaces"})
+}  // namespace ff
+
+namespace ff::synth {
+
+FLOWFUSION_CONFIG_ENUM_JSON(CameraMotion)
+FLOWFUSION_CONFIG_ENUM_JSON(CameraPathKind)
+FLOWFUSION_CONFIG_ENUM_JSON(HoleTest)
+
+// Bumped whenever the same seed would produce different images; written to scene.json.
+inline constexpr int kGeneratorVersion = 3;
 
 struct SynthConfig {
   uint64_t seed = 1;        // selects room, trajectory, objects and noise
@@ -172,9 +199,11 @@ struct AugmentConfig {
   // camera_height below the first camera (the world's z axis is taken as up, as in TUM's ground truth).
   int people = 0;
   double camera_height = 1.45;  // m, height of the first camera above the floor
+  HoleTest holes = HoleTest::BlackSurfaces;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AugmentConfig, seed, objects, first_frame, last_frame, min_distance,
-                                                max_distance, object_speed, noise, max_pose_gap, people, camera_height)
+                                                max_distance, object_speed, noise, max_pose_gap, people, camera_height,
+                                                holes)
 
 struct AugmentReport {
   int frames_written = 0;
