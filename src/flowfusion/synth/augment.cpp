@@ -113,6 +113,9 @@ struct Composite {
   cv::Mat mask;  // CV_8U, 255 = a pasted (moving) pixel
 };
 
+// The nearer of two depths where both are valid, else the valid one (0: neither).
+float nearerValid(float a, float b) { return a > 0 && b > 0 ? std::min(a, b) : std::max(a, b); }
+
 // Along each row (transpose for columns), per pixel without depth, from the nearest valid depth
 // before and after it: `enclosed` the farther of the two where both lie within reach_px (else 0),
 // `beside` the nearer of those found at any distance along the line (0 where neither is).
@@ -136,7 +139,7 @@ HoleSides holeSidesAlongRows(const cv::Mat& depth, int reach_px) {
       const float before = last >= 0 ? z[last] : 0.f, after = next >= 0 ? z[next] : 0.f;
       const bool both_near = last >= 0 && u - last <= reach_px && next >= 0 && next - u <= reach_px;
       enclosed[u] = both_near ? std::max(before, after) : 0.f;
-      beside[u] = before > 0 && after > 0 ? std::min(before, after) : std::max(before, after);
+      beside[u] = nearerValid(before, after);
     }
   }
   return out;
@@ -149,9 +152,6 @@ HoleSides holeSidesAlongColumns(const cv::Mat& depth, int reach_px) {
   cv::transpose(t.beside, out.beside);
   return out;
 }
-
-// The nearer of two depths where both are valid, else the valid one (0: neither).
-float nearerValid(float a, float b) { return a > 0 && b > 0 ? std::min(a, b) : std::max(a, b); }
 
 // The depth in front of which a pasted object shows, per pixel: the real depth where the sensor
 // measured one; in a hole, the surface the hole lies within, when valid depth encloses it on both
@@ -172,7 +172,8 @@ cv::Mat occludingDepth(const cv::Mat& depth, const cv::Mat& color, int reach_px,
     for (int u = 0; u < depth.cols; ++u) {
       if (depth.at<float>(v, u) > 0) continue;
       float z = nearerValid(rows.enclosed.at<float>(v, u), cols.enclosed.at<float>(v, u));
-      if (z == 0 && holes == HoleTest::BlackSurfaces && grey.at<uchar>(v, u) < black) z = nearerValid(rows.beside.at<float>(v, u), cols.beside.at<float>(v, u));
+      if (z == 0 && holes == HoleTest::BlackSurfaces && grey.at<uchar>(v, u) < black)
+        z = nearerValid(rows.beside.at<float>(v, u), cols.beside.at<float>(v, u));
       out.at<float>(v, u) = z;
     }
   return out;
