@@ -17,13 +17,18 @@ namespace {
 
 std::string shellArg(const fs::path& p) { return "'" + p.string() + "'"; }
 
+// The command was refused: exit status 2, a message holding `names`, and `out` not written.
+void expectRefused(const testing::CommandResult& r, const std::string& names, const fs::path& out) {
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(names), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(CliErrors, RunOnMissingFolder) {
   testing::TempDir tmp;
   const fs::path missing = tmp.path() / "no_such_sequence";
   const auto r = testing::runFlowfusion("run " + shellArg(missing) + " --out " + shellArg(tmp.path() / "out"));
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find(missing.string()), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(tmp.path() / "out"));
+  expectRefused(r, missing.string(), tmp.path() / "out");
 }
 
 TEST(CliErrors, RunIntoNonEmptyOutWithoutOverwrite) {
@@ -48,24 +53,19 @@ TEST(CliErrors, BadSettingValue) {
   const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
                                         " --set odometry.levels=0");
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("odometry.levels"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(tmp.path() / "out"));
+  expectRefused(r, "odometry.levels", tmp.path() / "out");
 }
 
 // A mode of the generators named by --set is one of its names, not silently the first one.
 TEST(CliErrors, UnknownModeName) {
   testing::TempDir tmp;
-  const auto synth = testing::runFlowfusion("synth " + shellArg(tmp.path() / "synth") + " --frames 2 --set camera_motion=spin");
-  EXPECT_EQ(synth.status, 2) << synth.output;
-  EXPECT_NE(synth.output.find("camera_motion must be handheld or rpy"), std::string::npos) << synth.output;
-  EXPECT_FALSE(fs::exists(tmp.path() / "synth"));
+  const auto synth =
+      testing::runFlowfusion("synth " + shellArg(tmp.path() / "synth") + " --frames 2 --set camera_motion=spin");
+  expectRefused(synth, "camera_motion must be handheld or rpy", tmp.path() / "synth");
   const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const auto augment = testing::runFlowfusion("augment " + shellArg(seq) + " " + shellArg(tmp.path() / "aug") +
                                               " --set holes=open");
-  EXPECT_EQ(augment.status, 2) << augment.output;
-  EXPECT_NE(augment.output.find("holes must be enclosed or black_surfaces"), std::string::npos) << augment.output;
-  EXPECT_FALSE(fs::exists(tmp.path() / "aug"));
+  expectRefused(augment, "holes must be enclosed or black_surfaces", tmp.path() / "aug");
 }
 
 TEST(CliErrors, UnknownSetting) {
@@ -73,9 +73,7 @@ TEST(CliErrors, UnknownSetting) {
   const std::string seq = testing::makeTinySequence(tmp.path() / "seq").string();
   const auto r = testing::runFlowfusion("run " + shellArg(seq) + " --out " + shellArg(tmp.path() / "out") +
                                         " --set nosuch.key=1");
-  EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_NE(r.output.find("nosuch"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(tmp.path() / "out"));
+  expectRefused(r, "nosuch", tmp.path() / "out");
 }
 
 TEST(CliErrors, NoIntrinsics) {

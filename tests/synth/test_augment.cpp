@@ -131,10 +131,6 @@ int maskPixelsIn(const std::string& dir, size_t index, const cv::Rect& box) {
   return cv::countNonZero(mask(box));
 }
 
-}  // namespace
-
-namespace {
-
 // The frame of an augmented sequence where the objects cover the most, and their centroid there.
 struct MostCovered {
   size_t frame = 0;
