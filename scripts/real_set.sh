@@ -10,6 +10,8 @@
 #   (the lines under bench's table are the set's means: mIoU and precision of the augmented scenes,
 #   the marked share of the static ones)
 # environment: FLOWFUSION (default build/apps/flowfusion), FLOWFUSION_SHARED_DATA (default ../shared/data)
+# and AUGMENT_OPTIONS, added to every scene's augment (e.g. "--set band_depth=none": the movers without
+# depth in the sensor's band, as a Kinect returns them; docs/scenes.md)
 set -euo pipefail
 
 if [[ $# -ne 1 ]]; then
@@ -35,7 +37,8 @@ mkdir -p "$out"
 scene() {
   local name=$1 static=$2 seed=$3
   shift 3
-  "$ff" augment "$static" "$out/$name" --seed "$seed" "$@" --overwrite
+  # shellcheck disable=SC2086  # AUGMENT_OPTIONS is a list of words
+  "$ff" augment "$static" "$out/$name" --seed "$seed" "$@" ${AUGMENT_OPTIONS:-} --overwrite
 }
 
 near=(--set min_distance=0.6 --set max_distance=1.0)  # boxes 0.6-1.0 m in front of the camera

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <vector>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -203,6 +204,39 @@ TEST(Augment, AHoleOnBlackPixelsCutByTheImagesEdgeHidesTheObjectsBehindTheSurfac
   const std::string out_version2 = (tmp.path() / "aug_version2").string();
   ff::synth::augmentSequence(in_black, out_version2, version2);
   EXPECT_GT(maskPixelsIn(out_version2, best.frame, middle), 10) << "version 2's test shows them through the black hole";
+}
+
+// A depth camera sees less than the colour camera: a registered depth image has no depth in a band
+// at the image's edges, for the room and for what passes in front of it. BandDepth::None pastes an
+// object there in the colour and the mask only; Drawn (generator version 3) gives it its depth.
+TEST(Augment, AnObjectInTheSensorsBandHasNoDepthThereUnderBandDepthNone) {
+  ff::testing::TempDir tmp;
+  const std::string in = writeStatic(tmp.path() / "static");
+  // A tenth of the image at each edge: 16 columns, 12 rows.
+  const std::vector<cv::Rect> band{{0, 0, 16, 120}, {144, 0, 16, 120}, {0, 0, 160, 12}, {0, 108, 160, 12}};
+  for (const cv::Rect& r : band) cutHole(in, r, 0);
+  const std::string drawn = (tmp.path() / "drawn").string(), none = (tmp.path() / "none").string();
+  auto config = noiseless(4);
+  ff::synth::augmentSequence(in, drawn, config);
+  config.band_depth = ff::synth::BandDepth::None;
+  ff::synth::augmentSequence(in, none, config);
+  const auto a = ff::TumSequence::open(drawn), b = ff::TumSequence::open(none);
+  ASSERT_EQ(a.size(), b.size());
+  cv::Mat edges(120, 160, CV_8U, cv::Scalar(0));
+  for (const cv::Rect& r : band) edges(r).setTo(255);
+  int in_band = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const auto fa = a.load(i), fb = b.load(i);
+    const cv::Mat mask = maskAt(a, fa.timestamp), pasted_in_band = (mask > 0) & edges;
+    EXPECT_EQ(cv::countNonZero(mask != maskAt(b, fb.timestamp)), 0) << "the same objects in the mask";
+    EXPECT_EQ(cv::norm(fa.color, fb.color, cv::NORM_INF), 0) << "and in the colour";
+    EXPECT_EQ(cv::countNonZero((fa.depth > 0) & pasted_in_band), cv::countNonZero(pasted_in_band));
+    EXPECT_EQ(cv::countNonZero((fb.depth > 0) & edges), 0) << "no depth in the band";
+    cv::Mat same = fa.depth == fb.depth;
+    EXPECT_EQ(cv::countNonZero(~same & ~edges), 0) << "the same depth elsewhere";
+    in_band += cv::countNonZero(pasted_in_band);
+  }
+  EXPECT_GT(in_band, 50) << "the objects pass through a band";
 }
 
 TEST(Augment, DropsFramesWithoutGroundTruthPose) {

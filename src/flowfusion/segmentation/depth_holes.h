@@ -6,11 +6,10 @@
 // valid pixels around it are; a hole beside a mover (the shadow of its edge, a black screen behind
 // it) borders the static world as much and keeps the label the scores gave it. A hole whose own
 // image motion no static surface around it explains, beside a mover, is the mover's (movingHoles).
-#include <array>
 #include <opencv2/core.hpp>
-#include <vector>
 
 #include "flowfusion/core/rgbd_frame.h"
+#include "flowfusion/core/sensor_band.h"
 
 namespace ff {
 
@@ -30,32 +29,6 @@ struct DepthAround {
   cv::Mat nearest, farthest;  // CV_32F, depth's size
 };
 DepthAround depthAround(const cv::Mat& depth, int window_px);
-
-// The sensor's invalid band, by its width in lines at each edge (rows at the top and the bottom,
-// columns at the left and the right): the lines from the edge inward, up to a tenth of the image, of
-// which at least kBandMinShare lack depth (TUM fr1: a dozen columns at the right, a few rows at the
-// top). A mover `augment` draws there keeps its depth, hence a share below 0.9.
-struct SensorBand {
-  int top = 0, bottom = 0, left = 0, right = 0;  // lines
-
-  static SensorBand of(const cv::Mat& depth);  // one frame's (CV_32F, metres)
-  cv::Mat pixels(cv::Size size) const;         // CV_8U, 255 on the band
-};
-
-// The band of a run's frames: per edge, the median of the frames' widths. The sensor's own band is
-// in nearly every frame; a surface nearer than the sensor's range at the border widens some frames'
-// (xyz_near's box face over the left third of the view), a mover in front of the band narrows some.
-class SensorBandMedian {
- public:
-  void add(const SensorBand& frame_band);
-  SensorBand median() const;  // all 0 before the first frame
-
- private:
-  std::array<std::vector<int>, 4> counts_;  // per edge (top, bottom, left, right): frames per width
-  int frames_ = 0;
-};
-constexpr float kBandMinShare = 0.6f;
-constexpr int kBandMaxFraction = 10;
 
 // The pixels without depth whose own motion can tell (CV_8U, 255; empty when none): off the
 // sensor's `band` (CV_8U, > 0, depth's size; SensorBand::pixels) and on surfaces neither black nor

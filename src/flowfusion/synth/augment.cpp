@@ -6,6 +6,7 @@
 
 #include "flowfusion/core/config.h"
 #include "flowfusion/core/error.h"
+#include "flowfusion/core/sensor_band.h"
 #include "flowfusion/synth/people.h"
 #include "flowfusion/synth/scene_model.h"
 #include "flowfusion/synth/synthetic_scene.h"
@@ -179,7 +180,8 @@ cv::Mat occludingDepth(const cv::Mat& depth, const cv::Mat& color, int reach_px,
   return out;
 }
 
-Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt, HoleTest holes) {
+Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const RenderOptions& opt, HoleTest holes,
+                    BandDepth band_depth) {
   const cv::Mat obj_color = finishColor(layer.color, opt);
   const cv::Mat obj_depth = kinectDepth(layer.depth_clean, layer.cos_incidence, opt);
   const cv::Mat z_front =
@@ -194,6 +196,7 @@ Composite composite(const RgbdFrame& real, const RenderedLayer& layer, const Ren
       c.color.at<cv::Vec3b>(v, u) = obj_color.at<cv::Vec3b>(v, u);
       c.depth.at<float>(v, u) = obj_depth.at<float>(v, u);
     }
+  if (band_depth == BandDepth::None) c.depth.setTo(0.f, SensorBand::of(real.depth).pixels(c.depth.size()) & c.mask);
   // Soften the pasted edges as the real camera's blur would (colour only; depth and mask stay exact).
   cv::Mat band, dil, ero, soft;
   cv::dilate(c.mask, dil, cv::Mat());
@@ -253,7 +256,7 @@ AugmentReport augmentSequence(const std::string& static_dir, const std::string& 
     const RgbdFrame real = seq.load(index);
     const double t = real.timestamp;
     opt.noise_key = hashCombine(hashCombine(config.seed, kAugmentNoise), static_cast<uint64_t>(std::llround(t * 1e6)));
-    const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt, config.holes);
+    const Composite c = composite(real, model.cast(T_world_cam, t - t0, camera), opt, config.holes, config.band_depth);
     // The real depth keeps its own time: out of step with the colour, as the sensor took it.
     writer.add(t, c.color, c.depth, T_world_cam, c.mask, real.depth_timestamp);
   }

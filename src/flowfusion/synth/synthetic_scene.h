@@ -51,6 +51,16 @@ enum class HoleTest {
   BlackSurfaces,
 };
 
+// What a pasted object returns in the depth sensor's band, the lines at the image's edges where the
+// real frame has no depth (SensorBand::of: the registered depth's border, on TUM fr1 about 45 rows at
+// the top and 12 and 50 columns at the left and the right, a fifth of the image).
+enum class BandDepth {
+  // Its depth, as elsewhere (generator version 3; a Kinect's registered depth has none there).
+  Drawn,
+  // None: the object shows in the colour and the mask only, as it would to the real sensor.
+  None,
+};
+
 }  // namespace ff::synth
 
 namespace ff {
@@ -60,6 +70,8 @@ FLOWFUSION_CONFIG_ENUM_NAMES(synth::CameraPathKind, "camera_path", {synth::Camer
                              {synth::CameraPathKind::Loop, "loop"})
 FLOWFUSION_CONFIG_ENUM_NAMES(synth::HoleTest, "holes", {synth::HoleTest::Enclosed, "enclosed"},
                              {synth::HoleTest::BlackSurfaces, "black_surfaces"})
+FLOWFUSION_CONFIG_ENUM_NAMES(synth::BandDepth, "band_depth", {synth::BandDepth::Drawn, "drawn"},
+                             {synth::BandDepth::None, "none"})
 }  // namespace ff
 
 namespace ff::synth {
@@ -67,6 +79,7 @@ namespace ff::synth {
 FLOWFUSION_CONFIG_ENUM_JSON(CameraMotion)
 FLOWFUSION_CONFIG_ENUM_JSON(CameraPathKind)
 FLOWFUSION_CONFIG_ENUM_JSON(HoleTest)
+FLOWFUSION_CONFIG_ENUM_JSON(BandDepth)
 
 // Bumped whenever the same seed would produce different images; written to scene.json.
 inline constexpr int kGeneratorVersion = 3;
@@ -200,10 +213,11 @@ struct AugmentConfig {
   int people = 0;
   double camera_height = 1.45;  // m, height of the first camera above the floor
   HoleTest holes = HoleTest::BlackSurfaces;
+  BandDepth band_depth = BandDepth::Drawn;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AugmentConfig, seed, objects, first_frame, last_frame, min_distance,
                                                 max_distance, object_speed, noise, max_pose_gap, people, camera_height,
-                                                holes)
+                                                holes, band_depth)
 
 struct AugmentReport {
   int frames_written = 0;
