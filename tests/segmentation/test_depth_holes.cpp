@@ -132,6 +132,8 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   EXPECT_EQ(cv::countNonZero(holes(cv::Rect(30, 10, 12, 12))), 0) << "a black screen";
   EXPECT_EQ(cv::countNonZero(holes(cv::Rect(10, 35, 4, 20))), 0) << "narrower than the opening";
   EXPECT_EQ(cv::countNonZero(holes(cv::Rect(72, 0, 8, 60))), 0) << "the band";
+  const cv::Mat with_band = holesToTest(s.depth, s.intensity, cv::Mat());
+  EXPECT_EQ(cv::countNonZero(with_band), 3 * 144 + 8 * 60) << "no band given: the band is tested too";
   const cv::Mat moving = holesMovingOnTheirOwn(holes, s.residual, inconsistent, 4.0);
   ASSERT_FALSE(moving.empty());
   EXPECT_EQ(cv::countNonZero(moving(cv::Rect(10, 10, 12, 12))), 144);
@@ -145,7 +147,7 @@ TEST(MovingHoles, TestsWideHolesOnGreySurfacesOutsideTheBandAndKeepsThoseTheFlow
   const cv::Mat no_band(60, 80, CV_8U, cv::Scalar(0));
   EXPECT_TRUE(holesToTest(white.depth, white.intensity, no_band).empty()) << "a window";
   EXPECT_THROW(holesToTest(s.depth, cv::Mat(30, 40, CV_32F), no_band), InputError);
-  EXPECT_THROW(holesToTest(s.depth, s.intensity, cv::Mat()), InputError);
+  EXPECT_THROW(holesToTest(s.depth, s.intensity, cv::Mat(30, 40, CV_8U)), InputError);
   EXPECT_THROW(holesMovingOnTheirOwn(holes, cv::Mat(30, 40, CV_32F), {}, 4.0), InputError);
 }
 

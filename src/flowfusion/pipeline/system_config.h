@@ -49,6 +49,10 @@ struct PipelineOptions {
   // this (pixels, after scores.flow_error_px's scaling) from the camera's motion at every depth
   // the surfaces around it and the stable map offer (movingHoles: a box nearer than the range; 0: never).
   double mask_hole_flow_px = 4.0;
+  // ... in the sensor's band too (SensorBand: the image's edges where a registered depth image has
+  // no depth for anything): a mover's part there is written where its flow moves beside the written
+  // mover; false: the band is never tested (docs/tuning.md#mask_band_holes).
+  bool mask_band_holes = true;
   // Pixels whose depth and grey level coincide with the stable static map (scores.agreement_margin,
   // agreement_intensity; none while scores.model_agreement is 0) are written as static
   // (clearMapAgreement: the background beside a mover that its clusters straddle or hold).
@@ -92,7 +96,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyfr
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
-                                                mask_hole_flow_px, mask_map_agreement, mask_min_region, mask_keep_flow_px,
+                                                mask_hole_flow_px, mask_band_holes, mask_map_agreement, mask_min_region, mask_keep_flow_px,
                                                 mask_keep_max_agreement, mask_edge_px, cluster_log, carry_scores,
                                                 fusion, fusion_every, constant_velocity, shift_to_colour_time,
                                                 model_min_valid_fraction, budget_ms)

@@ -87,10 +87,10 @@ cv::Mat openedOrEmpty(cv::Mat pixels) {
 
 cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity, const cv::Mat& band) {
   if (depth.type() != CV_32FC1 || intensity.type() != CV_32FC1 || intensity.size() != depth.size() ||
-      band.type() != CV_8UC1 || band.size() != depth.size())
+      (!band.empty() && (band.type() != CV_8UC1 || band.size() != depth.size())))
     throw InputError("holesToTest: the depth and the intensity must be CV_32FC1 and the band CV_8UC1, all of one size");
   cv::Mat holes = ~(depth > 0.f) & (intensity >= kBlackGrey) & (intensity <= kHoleMaxIntensity);
-  holes.setTo(0, band);
+  if (!band.empty()) holes.setTo(0, band);
   return openedOrEmpty(holes);
 }
 

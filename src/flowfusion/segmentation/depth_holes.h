@@ -30,8 +30,8 @@ struct DepthAround {
 };
 DepthAround depthAround(const cv::Mat& depth, int window_px);
 
-// The pixels without depth whose own motion can tell (CV_8U, 255; empty when none): off the
-// sensor's `band` (CV_8U, > 0, depth's size; SensorBand::pixels) and on surfaces neither black nor
+// The pixels without depth whose own motion can tell (CV_8U, 255; empty when none): off `band`
+// (CV_8U, > 0, depth's size, SensorBand::pixels; empty: none left out) and on surfaces neither black nor
 // white in `intensity` (CV_32F, [0, 1], depth's size; a black screen's or a window's flow is filled
 // in from around it and means nothing), in regions at least kHoleMinWidthPx wide (the flow's spill
 // over a mover's edge is narrower).
@@ -48,9 +48,9 @@ cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residu
 
 // Marks (255) in `mask` (CV_8U, > 0 = dynamic) the 8-connected regions of `moving_holes` (CV_8U, the
 // mask's size; holesMovingOnTheirOwn's) that touch a marked pixel or lie within 2 pixels of one. A
-// box held nearer than the sensor's range moves with its own sides that have depth; a black
-// screen's or a window's hole, whose flow is filled in from the static frame around it, and the
-// sensor's invalid bands lie beside no mover.
+// box held nearer than the sensor's range moves with its own sides that have depth, a person half
+// in the sensor's band with the half outside it; a black screen's or a window's hole, whose flow is
+// filled in from the static frame around it, lies beside no mover.
 void markHolesBesideMovers(cv::Mat& mask, const cv::Mat& moving_holes);
 
 }  // namespace ff
