@@ -83,8 +83,8 @@ cv::Mat SegmentationLoop::movingHoles(const FlowField& seg_flow, const Segmentat
     return {};
   const int level = config_.pipeline.segmentation_level;
   const cv::Mat& depth = in.cur.level(level).depth;
-  const cv::Mat holes =
-      holesToTest(depth, in.cur.level(level).intensity, config_.pipeline.mask_band_holes ? cv::Mat() : estimate.sensor_band);
+  const cv::Mat band_left_out = config_.pipeline.mask_band_holes ? cv::Mat() : estimate.sensor_band;
+  const cv::Mat holes = holesToTest(depth, in.cur.level(level).intensity, band_left_out);
   if (holes.empty()) return {};
   // What may lie in a hole: the surfaces around it, near and far, and the stable map's.
   const DepthAround around = depthAround(depth, (depth.cols / kHoleWindowFraction) | 1);
