@@ -43,8 +43,8 @@ struct MotionEstimate {
   // movers. Empty when none
   cv::Mat moving_holes;
   // 255 on the sensor's band (the run's median width, SensorBandMedian) at the segmentation level:
-  // no hole there is tested for its own motion, and the written mask's hole fill leaves it as the
-  // scores left it; empty before a scored frame
+  // no hole there is tested for its own motion (unless pipeline.mask_band_holes), and the written
+  // mask's hole fill leaves it as the scores left it; empty before a scored frame
   cv::Mat sensor_band;
   cv::Mat flow_mover;        // 1 on the flow's own mover (FlowMotionSplit) at the segmentation level; empty when none
   bool flow_mover_holds = false;  // the flow's mover stays dynamic through the rounds (at the start)

@@ -31,10 +31,10 @@ struct DepthAround {
 DepthAround depthAround(const cv::Mat& depth, int window_px);
 
 // The pixels without depth whose own motion can tell (CV_8U, 255; empty when none): off `band`
-// (CV_8U, > 0, depth's size, SensorBand::pixels; empty: none left out) and on surfaces neither black nor
-// white in `intensity` (CV_32F, [0, 1], depth's size; a black screen's or a window's flow is filled
-// in from around it and means nothing), in regions at least kHoleMinWidthPx wide (the flow's spill
-// over a mover's edge is narrower).
+// (CV_8U, > 0, depth's size, SensorBand::pixels; empty: none left out) and on surfaces neither
+// black nor white in `intensity` (CV_32F, [0, 1], depth's size; a black screen's or a window's flow
+// is filled in from around it and means nothing), in regions at least kHoleMinWidthPx wide (the
+// flow's spill over a mover's edge is narrower).
 cv::Mat holesToTest(const cv::Mat& depth, const cv::Mat& intensity, const cv::Mat& band);
 constexpr float kHoleMaxIntensity = 0.9f;  // white (a window); black is kBlackGrey
 constexpr int kHoleMinWidthPx = 7;
