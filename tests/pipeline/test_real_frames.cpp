@@ -483,8 +483,8 @@ TEST(RealFrames, ABoxNearerThanTheSensorsRangeIsWrittenWhereItsFlowMoves) {
   // borders the desk as much as the box's sides and is not filled (mask_hole_share): mean IoU 0.31.
   // Where its optical flow, which no static depth around it explains, lies beside the box's marked
   // sides, it is written (pipeline.mask_hole_flow_px): 0.76 with the sensor's band left out as the
-  // run's median width (SensorBandMedian; 0.80 with the band tested too, pipeline.mask_band_holes),
-  // 0.66 with each frame's own band, which the face widens to a tenth of the width at the left
+  // run's median width (SensorBandMedian; 0.80 with the band tested too, pipeline.mask_band_holes,
+  // the default since 2026-12-07), 0.66 with each frame's own band, which the face widens to a tenth of the width at the left
   // border. Only the written mask: the poses are the same.
   const testing::TempDir tmp;
   const auto augmented = withNearBox(133, tmp);
@@ -501,8 +501,9 @@ TEST(RealFrames, APersonsPartInTheSensorsBandIsWrittenWhereItsFlowMovesBesideThe
   // returns them: no depth in the sensor's band (band_depth none; on fr1 about 45 rows at the top).
   // In frames 1-8 the people's heads and shoulders lie in the top band: no depth, no cluster, so
   // their part there is written only where its flow, which no static depth explains, moves beside
-  // the written rest of them (pipeline.mask_band_holes, off by default): mean IoU 0.79 against 0.53
-  // without. Only the written mask: the poses are the same.
+  // the written rest of them and its colour is the people's rather than the room's
+  // (pipeline.mask_band_holes): mean IoU 0.79 against 0.53 without. Only the written mask: the poses
+  // are the same.
   const testing::TempDir tmp;
   synth::AugmentConfig config;
   config.seed = 91;
@@ -512,10 +513,8 @@ TEST(RealFrames, APersonsPartInTheSensorsBandIsWrittenWhereItsFlowMovesBesideThe
   config.band_depth = synth::BandDepth::None;
   const auto augmented = withMovers("fr1_xyz_head300", config, tmp);
   if (!augmented) GTEST_SKIP() << testing::sharedDataMissing();
-  SystemConfig band_tested;
-  band_tested.pipeline.mask_band_holes = true;
   const CauseRuns r = runWithAndWithoutCause(
-      *augmented, band_tested, [](SystemConfig& c) { c.pipeline.mask_band_holes = false; }, 1, 8);
+      *augmented, SystemConfig{}, [](SystemConfig& c) { c.pipeline.mask_band_holes = false; }, 1, 8);
   EXPECT_GT(r.with_iou, 0.7) << "frames 1-8, the people's part in the band written";
   EXPECT_LT(r.without_iou, 0.6) << "the cause: the band never tested";
   expectSamePoses(r.with, r.without);

@@ -167,5 +167,34 @@ TEST(MovingHoles, MarksOnlyTheRegionsBesideAMover) {
   EXPECT_THROW(markHolesBesideMovers(small, moving), InputError);
 }
 
+TEST(MovingHoles, InTheBandKeepsTheMoversColourAndClearsTheRooms) {
+  // A grey room with depth, a green mover at columns 40-59 (written) and the sensor's band at
+  // columns 60-79 without depth: the mover goes on into it in rows 10-29, below that the band is
+  // the room. The flow moves in the band's rows 10-49, the room's part spilled over from the mover.
+  const cv::Vec3b grey(128, 128, 128), green(0, 160, 0);
+  cv::Mat color(60, 80, CV_8UC3, grey), depth(60, 80, CV_32F, cv::Scalar(2.f));
+  cv::Mat band(60, 80, CV_8U, cv::Scalar(0)), mask(60, 80, CV_8U, cv::Scalar(0));
+  band.colRange(60, 80).setTo(255);
+  depth.setTo(0.f, band);
+  color(cv::Rect(40, 10, 40, 20)).setTo(green);
+  mask(cv::Rect(40, 10, 20, 20)).setTo(255);
+  cv::Mat moving(60, 80, CV_8U, cv::Scalar(0));
+  moving(cv::Rect(60, 10, 20, 40)).setTo(255);
+  moving(cv::Rect(20, 40, 10, 10)).setTo(255);  // a hole off the band: not this rule's
+  clearBandHolesOfWorldColour(moving, band, mask, color, depth);
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(60, 10, 20, 20))), 400) << "the mover's part in the band";
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(60, 30, 20, 20))), 0) << "the room's, the flow spilled";
+  EXPECT_EQ(cv::countNonZero(moving(cv::Rect(20, 40, 10, 10))), 100);
+
+  // Without a written mover around a region, or without a band, nothing is cleared.
+  cv::Mat apart = cv::Mat(60, 80, CV_8U, cv::Scalar(0));
+  apart(cv::Rect(60, 30, 20, 20)).setTo(255);
+  clearBandHolesOfWorldColour(apart, band, cv::Mat(60, 80, CV_8U, cv::Scalar(0)), color, depth);
+  EXPECT_EQ(cv::countNonZero(apart), 400);
+  clearBandHolesOfWorldColour(apart, {}, mask, color, depth);
+  EXPECT_EQ(cv::countNonZero(apart), 400);
+  EXPECT_THROW(clearBandHolesOfWorldColour(apart, band, mask, cv::Mat(60, 80, CV_8UC1), depth), InputError);
+}
+
 }  // namespace
 }  // namespace ff

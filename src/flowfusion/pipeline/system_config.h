@@ -51,9 +51,9 @@ struct PipelineOptions {
   double mask_hole_flow_px = 4.0;
   // ... in the sensor's band too (SensorBand: the image's edges where a registered depth image has
   // no depth for anything): a mover's part there is written where its flow moves beside the written
-  // mover. Off by default: where the band's movers have depth (augment's scenes) the flow beside a
-  // mover at the edge spills into it (docs/tuning.md#mask_band_holes).
-  bool mask_band_holes = false;
+  // mover and its colour is likelier the mover's than the room's around it (the flow beside a mover
+  // at the edge spills over the room there; clearBandHolesOfWorldColour, docs/tuning.md#mask_band_holes).
+  bool mask_band_holes = true;
   // Pixels whose depth and grey level coincide with the stable static map (scores.agreement_margin,
   // agreement_intensity; none while scores.model_agreement is 0) are written as static
   // (clearMapAgreement: the background beside a mover that its clusters straddle or hold).

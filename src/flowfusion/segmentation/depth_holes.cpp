@@ -104,6 +104,72 @@ cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residu
   return openedOrEmpty(moving);
 }
 
+namespace {
+
+int colourBin(const cv::Vec3b& bgr) {
+  constexpr int kShift = 8 - 3;  // 256 levels into kColourBins = 2^3
+  static_assert(kColourBins == 1 << (8 - kShift));
+  return ((bgr[0] >> kShift) * kColourBins + (bgr[1] >> kShift)) * kColourBins + (bgr[2] >> kShift);
+}
+
+// The colours of a ring's pixels, written movers' and the static world's apart, one count added to
+// every bin.
+struct RingColours {
+  std::vector<double> mover, world;
+  double movers = 0, worlds = 0;  // pixels counted
+  RingColours() : mover(kColourBins * kColourBins * kColourBins, 1.0), world(mover) {}
+  bool moverLikelier(const cv::Vec3b& bgr) const {
+    const int b = colourBin(bgr);
+    return mover[b] / (movers + mover.size()) >= world[b] / (worlds + world.size());
+  }
+};
+
+RingColours ringColours(const cv::Mat& ring, const cv::Mat& mask, const cv::Mat& color) {
+  RingColours out;
+  for (int v = 0; v < ring.rows; ++v)
+    for (int u = 0; u < ring.cols; ++u) {
+      if (!ring.at<uchar>(v, u)) continue;
+      const bool mover = mask.at<uchar>(v, u) > 0;
+      (mover ? out.mover : out.world)[colourBin(color.at<cv::Vec3b>(v, u))] += 1;
+      (mover ? out.movers : out.worlds) += 1;
+    }
+  return out;
+}
+
+}  // namespace
+
+void clearBandHolesOfWorldColour(cv::Mat& moving_holes, const cv::Mat& band, const cv::Mat& mask, const cv::Mat& color,
+                                 const cv::Mat& depth) {
+  const cv::Size size = moving_holes.size();
+  if (moving_holes.type() != CV_8UC1 || mask.type() != CV_8UC1 || color.type() != CV_8UC3 ||
+      depth.type() != CV_32FC1 || mask.size() != size || color.size() != size || depth.size() != size ||
+      (!band.empty() && (band.type() != CV_8UC1 || band.size() != size)))
+    throw InputError("clearBandHolesOfWorldColour: the holes, the band and the mask must be CV_8UC1, the colour CV_8UC3 "
+                     "and the depth CV_32FC1, all of one size");
+  if (band.empty()) return;
+  cv::Mat regions, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(moving_holes & band, regions, stats, centroids, 8, CV_32S);
+  const cv::Mat ring_square =
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * kColourRingPx + 1, 2 * kColourRingPx + 1));
+  for (int r = 1; r < n; ++r) {
+    const cv::Rect box(stats.at<int>(r, cv::CC_STAT_LEFT), stats.at<int>(r, cv::CC_STAT_TOP),
+                       stats.at<int>(r, cv::CC_STAT_WIDTH), stats.at<int>(r, cv::CC_STAT_HEIGHT));
+    const cv::Rect roi = (box + cv::Size(2 * kColourRingPx, 2 * kColourRingPx) -
+                          cv::Point(kColourRingPx, kColourRingPx)) & cv::Rect(cv::Point(), size);
+    const cv::Mat region = regions(roi) == r;
+    cv::Mat ring;
+    cv::dilate(region, ring, ring_square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+    ring = ring & ~region & (depth(roi) > 0.f);
+    const RingColours colours = ringColours(ring, mask(roi), color(roi));
+    if (colours.movers == 0) continue;
+    cv::Mat holes = moving_holes(roi);
+    const cv::Mat color_roi = color(roi);
+    for (int v = 0; v < roi.height; ++v)
+      for (int u = 0; u < roi.width; ++u)
+        if (region.at<uchar>(v, u) && !colours.moverLikelier(color_roi.at<cv::Vec3b>(v, u))) holes.at<uchar>(v, u) = 0;
+  }
+}
+
 void markHolesBesideMovers(cv::Mat& mask, const cv::Mat& moving_holes) {
   if (mask.type() != CV_8UC1 || moving_holes.type() != CV_8UC1 || moving_holes.size() != mask.size())
     throw InputError("markHolesBesideMovers: the mask and the moving holes must be CV_8UC1 of one size");

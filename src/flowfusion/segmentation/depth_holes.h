@@ -46,6 +46,19 @@ constexpr int kHoleMinWidthPx = 7;
 cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residual_px, const cv::Mat& flow_inconsistent,
                               double min_flow_px);
 
+// Clears the pixels of `moving_holes` (CV_8U, holesMovingOnTheirOwn's at the mask's size) in `band`
+// (CV_8U, > 0: the sensor's band; empty: nothing is cleared) whose colour is likelier the static
+// world's than the written movers': per 8-connected region of them, BGR histograms (kColourBins a
+// channel, one count added to every bin) of the pixels with depth (`depth`, CV_32F) within
+// kColourRingPx of it, split by `mask` (CV_8U, > 0 = dynamic); `color` CV_8UC3 BGR. In the band
+// nothing has depth: beside a mover at the image's edge its flow spills over the room there as
+// readily as over the mover's own part, and the room keeps the room's colours. A region with no
+// written pixel around it is left as it is (markHolesBesideMovers will not take it).
+void clearBandHolesOfWorldColour(cv::Mat& moving_holes, const cv::Mat& band, const cv::Mat& mask, const cv::Mat& color,
+                                 const cv::Mat& depth);
+constexpr int kColourBins = 8;
+constexpr int kColourRingPx = 15;
+
 // Marks (255) in `mask` (CV_8U, > 0 = dynamic) the 8-connected regions of `moving_holes` (CV_8U, the
 // mask's size; holesMovingOnTheirOwn's) that touch a marked pixel or lie within 2 pixels of one. A
 // box held nearer than the sensor's range moves with its own sides that have depth, a person half
