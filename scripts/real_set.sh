@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The real scene set of issue 29 (docs/scenes.md, "Judging a change on real frames"): movers
-# composited into the real TUM frames of ../shared/data/tum by `augment` (generator version 3), each
+# composited into the real TUM frames of ../shared/data/tum by `augment` (generator version 4), each
 # with the real static sequence as its twin, and the two static sequences themselves. The first seven
 # are the scenes the pipeline was tuned on, the last four were made only to check it. Reproducible
 # from the seeds below.
@@ -10,8 +10,8 @@
 #   (the lines under bench's table are the set's means: mIoU and precision of the augmented scenes,
 #   the marked share of the static ones)
 # environment: FLOWFUSION (default build/apps/flowfusion), FLOWFUSION_SHARED_DATA (default ../shared/data)
-# and AUGMENT_OPTIONS, added to every scene's augment (e.g. "--set band_depth=none": the movers without
-# depth in the sensor's band, as a Kinect returns them; docs/scenes.md)
+# and AUGMENT_OPTIONS, added to every scene's augment (e.g. "--set band_depth=drawn": the movers with
+# their depth in the sensor's band, generator version 3's scenes; docs/scenes.md)
 set -euo pipefail
 
 if [[ $# -ne 1 ]]; then

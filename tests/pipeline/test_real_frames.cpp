@@ -246,7 +246,8 @@ TEST(RealFrames, SmallMarksInsideTheViewOfStaticFr1RpyAreNotWritten) {
 // `head` (its frames up to last_frame, -1: all), written to `out`; nullopt when ../shared is absent.
 // The cause tests made before generator version 3 keep their scenes with version 2's hole test
 // (synth::HoleTest::Enclosed: a person shows through a black screen too large to be enclosed),
-// where their causes show.
+// where their causes show. All of them but the band's own test keep version 3's band
+// (synth::BandDepth::Drawn: the movers' depth in the sensor's band), on which they were measured.
 std::optional<TumSequence> withMovers(const std::string& head, synth::AugmentConfig config, const testing::TempDir& out) {
   const auto dir = testing::sharedTum(head);
   if (!dir) return std::nullopt;
@@ -258,6 +259,7 @@ std::optional<TumSequence> withMovers(const std::string& head, unsigned seed, in
                                       synth::HoleTest holes = synth::HoleTest::BlackSurfaces) {
   synth::AugmentConfig config;
   config.holes = holes;
+  config.band_depth = synth::BandDepth::Drawn;
   config.seed = seed;
   config.objects = objects;
   config.people = people;
@@ -268,6 +270,7 @@ std::optional<TumSequence> withMovers(const std::string& head, unsigned seed, in
 // docs/scenes.md), frames 0..last.
 std::optional<TumSequence> withNearBox(int last, const testing::TempDir& out) {
   synth::AugmentConfig near;
+  near.band_depth = synth::BandDepth::Drawn;
   near.seed = 2902;
   near.objects = 1;
   near.min_distance = 0.6;

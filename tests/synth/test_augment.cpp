@@ -207,9 +207,10 @@ TEST(Augment, AHoleOnBlackPixelsCutByTheImagesEdgeHidesTheObjectsBehindTheSurfac
 }
 
 // A depth camera sees less than the colour camera: a registered depth image has no depth in a band
-// at the image's edges, for the room and for what passes in front of it. BandDepth::None pastes an
-// object there in the colour and the mask only; Drawn (generator version 3) gives it its depth.
-TEST(Augment, AnObjectInTheSensorsBandHasNoDepthThereUnderBandDepthNone) {
+// at the image's edges, for the room and for what passes in front of it. BandDepth::None (the
+// default, generator version 4) pastes an object there in the colour and the mask only; Drawn
+// (generator version 3) gives it its depth.
+TEST(Augment, AnObjectInTheSensorsBandHasNoDepthThereUnlessDrawn) {
   ff::testing::TempDir tmp;
   const std::string in = writeStatic(tmp.path() / "static");
   // A tenth of the image at each edge: 16 columns, 12 rows.
@@ -217,9 +218,10 @@ TEST(Augment, AnObjectInTheSensorsBandHasNoDepthThereUnderBandDepthNone) {
   for (const cv::Rect& r : band) cutHole(in, r, 0);
   const std::string drawn = (tmp.path() / "drawn").string(), none = (tmp.path() / "none").string();
   auto config = noiseless(4);
-  ff::synth::augmentSequence(in, drawn, config);
-  config.band_depth = ff::synth::BandDepth::None;
+  EXPECT_EQ(config.band_depth, ff::synth::BandDepth::None);
   ff::synth::augmentSequence(in, none, config);
+  config.band_depth = ff::synth::BandDepth::Drawn;
+  ff::synth::augmentSequence(in, drawn, config);
   const auto a = ff::TumSequence::open(drawn), b = ff::TumSequence::open(none);
   ASSERT_EQ(a.size(), b.size());
   cv::Mat edges(120, 160, CV_8U, cv::Scalar(0));

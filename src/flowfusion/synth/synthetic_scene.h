@@ -57,7 +57,8 @@ enum class HoleTest {
 enum class BandDepth {
   // Its depth, as elsewhere (generator version 3; a Kinect's registered depth has none there).
   Drawn,
-  // None: the object shows in the colour and the mask only, as it would to the real sensor.
+  // None: the object shows in the colour and the mask only, as it would to the real sensor
+  // (generator version 4, the default).
   None,
 };
 
@@ -82,7 +83,7 @@ FLOWFUSION_CONFIG_ENUM_JSON(HoleTest)
 FLOWFUSION_CONFIG_ENUM_JSON(BandDepth)
 
 // Bumped whenever the same seed would produce different images; written to scene.json.
-inline constexpr int kGeneratorVersion = 3;
+inline constexpr int kGeneratorVersion = 4;
 
 struct SynthConfig {
   uint64_t seed = 1;        // selects room, trajectory, objects and noise
@@ -213,7 +214,7 @@ struct AugmentConfig {
   int people = 0;
   double camera_height = 1.45;  // m, height of the first camera above the floor
   HoleTest holes = HoleTest::BlackSurfaces;
-  BandDepth band_depth = BandDepth::Drawn;
+  BandDepth band_depth = BandDepth::None;
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(AugmentConfig, seed, objects, first_frame, last_frame, min_distance,
                                                 max_distance, object_speed, noise, max_pose_gap, people, camera_height,
