@@ -166,7 +166,8 @@ void clearBandHolesOfWorldColour(cv::Mat& moving_holes, const cv::Mat& band, con
     const cv::Mat color_roi = color(roi);
     for (int v = 0; v < roi.height; ++v)
       for (int u = 0; u < roi.width; ++u)
-        if (region.at<uchar>(v, u) && !colours.moverLikelier(color_roi.at<cv::Vec3b>(v, u))) holes.at<uchar>(v, u) = 0;
+        if (region.at<uchar>(v, u) && !colours.moverLikelier(color_roi.at<cv::Vec3b>(v, u)))
+          holes.at<uchar>(v, u) = 0;
   }
 }
 
