@@ -173,7 +173,8 @@ void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedSc
   if (!tracked.moving_holes.empty()) {
     cv::Mat moving = atMaskSize(tracked.moving_holes);
     moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
-    clearBandHolesOfWorldColour(moving, atMaskSize(tracked.sensor_band), mask, frame.color, frame.depth);
+    if (opt.mask_band_holes)
+      clearBandHolesOfWorldColour(moving, atMaskSize(tracked.sensor_band), mask, frame.color, frame.depth);
     markHolesBesideMovers(mask, moving);
   }
   refineMaskEdges(mask, frame.depth, frame.color, opt.mask_edge_px);
