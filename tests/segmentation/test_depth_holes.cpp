@@ -196,5 +196,38 @@ TEST(MovingHoles, InTheBandKeepsTheMoversColourAndClearsTheRooms) {
   EXPECT_THROW(clearBandHolesOfWorldColour(apart, band, mask, cv::Mat(60, 80, CV_8UC1), depth), InputError);
 }
 
+TEST(MovingHoles, TheBandBesideAWrittenMoverIsTestedByColourWhateverItsFlow) {
+  // The scene above without any flow: the mover stands at the edge. The band's pixels within the
+  // reach of the written mover are tested, the room's part of them cleared by its colour; a band
+  // pixel beyond the reach, and a pixel with depth, are not taken.
+  const cv::Vec3b grey(128, 128, 128), green(0, 160, 0);
+  cv::Mat color(60, 80, CV_8UC3, grey), depth(60, 80, CV_32F, cv::Scalar(2.f));
+  cv::Mat band(60, 80, CV_8U, cv::Scalar(0)), mask(60, 80, CV_8U, cv::Scalar(0));
+  band.colRange(60, 80).setTo(255);
+  depth.colRange(60, 80).setTo(0.f);
+  band.rowRange(0, 4).setTo(255);  // a top band whose pixels have depth here: never taken
+  color(cv::Rect(40, 10, 40, 20)).setTo(green);
+  mask(cv::Rect(40, 10, 20, 20)).setTo(255);
+  const int reach_px = 12;
+  cv::Mat beside = bandBesideMovers(band, mask, depth, reach_px);
+  EXPECT_EQ(cv::countNonZero(beside.colRange(0, 60)), 0) << "only the band's pixels without depth";
+  mask(cv::Rect(40, 0, 20, 10)).setTo(255);  // the mover reaches the top band, which has depth
+  EXPECT_EQ(cv::countNonZero(bandBesideMovers(band, mask, depth, reach_px).colRange(0, 60)), 0);
+  mask(cv::Rect(40, 0, 20, 10)).setTo(0);
+  EXPECT_EQ(cv::countNonZero(beside(cv::Rect(60, 10, 12, 20))), 12 * 20) << "within the reach";
+  EXPECT_EQ(cv::countNonZero(beside.colRange(73, 80)), 0) << "beyond the reach";
+  EXPECT_GT(cv::countNonZero(beside(cv::Rect(60, 30, 12, 12))), 0) << "the room beside the mover too";
+  clearBandHolesOfWorldColour(beside, band, mask, color, depth);
+  markHolesBesideMovers(mask, beside);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(60, 10, 12, 20))), 12 * 20) << "the mover's part in the band";
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(60, 30, 20, 30))), 0) << "the room's part";
+
+  // No written mover, or no band: nothing.
+  EXPECT_EQ(cv::countNonZero(bandBesideMovers(band, cv::Mat(60, 80, CV_8U, cv::Scalar(0)), depth, reach_px)), 0);
+  EXPECT_EQ(cv::countNonZero(bandBesideMovers({}, mask, depth, reach_px)), 0);
+  EXPECT_THROW(bandBesideMovers(band, mask, depth, 0), InputError);
+  EXPECT_THROW(bandBesideMovers(band, mask, cv::Mat(60, 80, CV_8U), reach_px), InputError);
+}
+
 }  // namespace
 }  // namespace ff

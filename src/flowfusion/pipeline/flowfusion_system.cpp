@@ -170,13 +170,17 @@ void FlowFusionSystem::finishWrittenMask(const RgbdFrame& frame, const TrackedSc
   if (opt.mask_map_agreement) clearMapAgreement(mask, tracked.map_agreement);
   dropSmallInteriorRegions(mask, opt.mask_min_region, atMaskSize(tracked.seen_moving));
   if (opt.mask_hole_share > 0) fillDepthHoles(mask, frame.depth, opt.mask_hole_share, atMaskSize(tracked.sensor_band));
-  if (!tracked.moving_holes.empty()) {
-    cv::Mat moving = atMaskSize(tracked.moving_holes);
-    moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
-    if (opt.mask_band_holes)
-      clearBandHolesOfWorldColour(moving, atMaskSize(tracked.sensor_band), mask, frame.color, frame.depth);
-    markHolesBesideMovers(mask, moving);
+  cv::Mat moving = atMaskSize(tracked.moving_holes);
+  if (!moving.empty()) moving.setTo(0, frame.depth > 0.f);  // the input's own holes within the level's
+  if (opt.mask_band_holes) {
+    const cv::Mat band = atMaskSize(tracked.sensor_band);
+    if (opt.mask_band_reach_px > 0) {
+      const cv::Mat beside = bandBesideMovers(band, mask, frame.depth, opt.mask_band_reach_px);
+      if (cv::countNonZero(beside) > 0) moving = moving.empty() ? beside : (moving | beside);
+    }
+    if (!moving.empty()) clearBandHolesOfWorldColour(moving, band, mask, frame.color, frame.depth);
   }
+  if (!moving.empty()) markHolesBesideMovers(mask, moving);
   refineMaskEdges(mask, frame.depth, frame.color, opt.mask_edge_px);
 }
 

@@ -28,6 +28,8 @@ void validate(const PipelineOptions& p, const OdometryConfig& odometry) {
     throw InputError("pipeline.mask_hole_share must be 0 (never) to 1 (a share of the hole's neighbours)");
   if (!(p.mask_hole_flow_px >= 0 && std::isfinite(p.mask_hole_flow_px)))
     throw InputError("pipeline.mask_hole_flow_px must be a finite number of pixels >= 0 (0: never)");
+  if (p.mask_band_reach_px < 0 || p.mask_band_reach_px > 200)
+    throw InputError("pipeline.mask_band_reach_px must be 0 (only the band's moving holes) to 200 pixels");
   if (p.mask_edge_px < 0 || p.mask_edge_px > 16) throw InputError("pipeline.mask_edge_px must be 0 (off) to 16");
   if (!(p.mask_min_region >= 0 && p.mask_min_region < 1))
     throw InputError("pipeline.mask_min_region must be 0 (keep every region) or a share of the image below 1");

@@ -54,6 +54,10 @@ struct PipelineOptions {
   // mover and its colour is likelier the mover's than the room's around it (the flow beside a mover
   // at the edge spills over the room there; clearBandHolesOfWorldColour, docs/tuning.md#mask_band_holes).
   bool mask_band_holes = true;
+  // ... and, with it, every band pixel within this many rows and columns of the written mask, whatever
+  // its flow, under the same colour test (bandBesideMovers: a person standing at the image's edge
+  // barely moves against the room; 0: only the moving ones; docs/tuning.md#mask_band_reach_px).
+  int mask_band_reach_px = 30;
   // Pixels whose depth and grey level coincide with the stable static map (scores.agreement_margin,
   // agreement_intensity; none while scores.model_agreement is 0) are written as static
   // (clearMapAgreement: the background beside a mover that its clusters straddle or hold).
@@ -97,7 +101,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyfr
                                                 keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
                                                 converged_translation, converged_rotation_deg, refine_coarsest_level,
                                                 refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
-                                                mask_hole_flow_px, mask_band_holes, mask_map_agreement, mask_min_region,
+                                                mask_hole_flow_px, mask_band_holes, mask_band_reach_px, mask_map_agreement, mask_min_region,
                                                 mask_keep_flow_px, mask_keep_max_agreement, mask_edge_px, cluster_log,
                                                 carry_scores, fusion, fusion_every, constant_velocity,
                                                 shift_to_colour_time, model_min_valid_fraction, budget_ms)

@@ -46,6 +46,12 @@ constexpr int kHoleMinWidthPx = 7;
 cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residual_px, const cv::Mat& flow_inconsistent,
                               double min_flow_px);
 
+// The pixels of `band` (CV_8U, > 0: the sensor's band; empty: none) without depth (`depth`, CV_32F,
+// metres) within reach_px (> 0) rows and columns of a marked pixel of `mask` (CV_8U, > 0 = dynamic), CV_8U 255,
+// depth's size: where a mover at the image's edge goes on without depth, whatever its flow (a person
+// standing at the edge barely moves there). clearBandHolesOfWorldColour then keeps its colours' part.
+cv::Mat bandBesideMovers(const cv::Mat& band, const cv::Mat& mask, const cv::Mat& depth, int reach_px);
+
 // Clears the pixels of `moving_holes` (CV_8U, holesMovingOnTheirOwn's at the mask's size) in `band`
 // (CV_8U, > 0: the sensor's band; empty: nothing is cleared) whose colour is likelier the static
 // world's than the written movers': per 8-connected region of them, BGR histograms (kColourBins a
