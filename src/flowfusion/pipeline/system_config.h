@@ -97,14 +97,15 @@ struct PipelineOptions {
   // Results then depend on the machine's speed; 0 keeps them reproducible (docs/tuning.md#budget_ms).
   double budget_ms = 0;
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation,
-                                                keyframe_rotation_deg, model_keyframes, segmentation, max_iterations,
-                                                converged_translation, converged_rotation_deg, refine_coarsest_level,
-                                                refine_iterations, segmentation_level, mask_threshold, mask_hole_share,
-                                                mask_hole_flow_px, mask_band_holes, mask_band_reach_px, mask_map_agreement, mask_min_region,
-                                                mask_keep_flow_px, mask_keep_max_agreement, mask_edge_px, cluster_log,
-                                                carry_scores, fusion, fusion_every, constant_velocity,
-                                                shift_to_colour_time, model_min_valid_fraction, budget_ms)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PipelineOptions, tracking, keyframe_translation, keyframe_rotation_deg,
+                                                model_keyframes, segmentation, max_iterations, converged_translation,
+                                                converged_rotation_deg, refine_coarsest_level, refine_iterations,
+                                                segmentation_level, mask_threshold, mask_hole_share, mask_hole_flow_px,
+                                                mask_band_holes, mask_band_reach_px, mask_map_agreement,
+                                                mask_min_region, mask_keep_flow_px, mask_keep_max_agreement,
+                                                mask_edge_px, cluster_log, carry_scores, fusion, fusion_every,
+                                                constant_velocity, shift_to_colour_time, model_min_valid_fraction,
+                                                budget_ms)
 
 struct SystemConfig {
   PipelineOptions pipeline;

@@ -47,19 +47,21 @@ cv::Mat holesMovingOnTheirOwn(const cv::Mat& holes, const cv::Mat& static_residu
                               double min_flow_px);
 
 // The pixels of `band` (CV_8U, > 0: the sensor's band; empty: none) without depth (`depth`, CV_32F,
-// metres) within reach_px (> 0) rows and columns of a marked pixel of `mask` (CV_8U, > 0 = dynamic), CV_8U 255,
-// depth's size: where a mover at the image's edge goes on without depth, whatever its flow (a person
-// standing at the edge barely moves there). clearBandHolesOfWorldColour then keeps its colours' part.
+// metres) within reach_px (> 0) rows and columns of a marked pixel of `mask` (CV_8U, > 0 =
+// dynamic), CV_8U 255, depth's size: where a mover at the image's edge goes on without depth,
+// whatever its flow (a person standing at the edge barely moves there). clearBandHolesOfWorldColour
+// then keeps its colours' part.
 cv::Mat bandBesideMovers(const cv::Mat& band, const cv::Mat& mask, const cv::Mat& depth, int reach_px);
 
-// Clears the pixels of `moving_holes` (CV_8U, holesMovingOnTheirOwn's at the mask's size) in `band`
-// (CV_8U, > 0: the sensor's band; empty: nothing is cleared) whose colour is likelier the static
-// world's than the written movers': per 8-connected region of them, BGR histograms (kColourBins a
-// channel, one count added to every bin) of the pixels with depth (`depth`, CV_32F) within
-// kColourRingPx of it, split by `mask` (CV_8U, > 0 = dynamic); `color` CV_8UC3 BGR. In the band
-// nothing has depth: beside a mover at the image's edge its flow spills over the room there as
-// readily as over the mover's own part, and the room keeps the room's colours. A region with no
-// written pixel around it is left as it is (markHolesBesideMovers will not take it).
+// Clears the pixels of `moving_holes` (CV_8U, holesMovingOnTheirOwn's at the mask's size, with
+// bandBesideMovers') in `band` (CV_8U, > 0: the sensor's band; empty: nothing is cleared) whose
+// colour is likelier the static world's than the written movers': per 8-connected region of them,
+// BGR histograms (kColourBins a channel, one count added to every bin) of the pixels with depth
+// (`depth`, CV_32F) within kColourRingPx of it, split by `mask` (CV_8U, > 0 = dynamic); `color`
+// CV_8UC3 BGR. In the band nothing has depth: beside a mover at the image's edge its flow spills
+// over the room there as readily as over the mover's own part, and the room keeps the room's
+// colours. A region with no written pixel around it is left as it is (markHolesBesideMovers will
+// not take it).
 void clearBandHolesOfWorldColour(cv::Mat& moving_holes, const cv::Mat& band, const cv::Mat& mask, const cv::Mat& color,
                                  const cv::Mat& depth);
 constexpr int kColourBins = 8;
